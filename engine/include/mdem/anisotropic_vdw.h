@@ -1,0 +1,71 @@
+#pragma once
+// Anisotropic CNT–CNT van der Waals contact (model.md §4, thesis Eq. 5–8, Tables 2-2, 2-3).
+//
+//   U(R, θ, γ) = M(R, γ) · f_c(R) · V(D),  V(D) = 4ε (A D^-α − B D^-β),  D = R / (r δ(θ)) − 2
+//
+// continued linearly in D below D_min (C¹), so overlapping tubes feel a finite repulsion.
+#include <array>
+
+#include "mdem/force_model.h"
+
+namespace mdem {
+
+enum class VdwTorque {
+  Exact,  // forces and torques are the exact gradient of U (energy-conserving), the default
+  Pfc,    // Table 2-3 literally: radial + shear force, aligning moment −∂U/∂γ only
+};
+
+struct VdwParams {
+  double epsilon = 0.03733;  // eV (4ε = 149.3 meV)
+  double A = 0.0223;
+  double B = 1.31;
+  double alpha = 9.5;
+  double beta = 4.0;
+  double radius = 0.678;          // r (nm)
+  double segment_length = 1.356;  // T (nm); smoothstep cutoff from 3T to 4T
+  std::array<double, 5> C = {0.35819, 0.03263, -0.00138, -0.00017, 0.00024};
+  double d_min = 0.4;             // below: V continued linearly (C¹)
+  double w_prefactor = 90.0;      // W(R) = 90 (R/r)^-7.5 for R/r > 2.75
+  double w_exponent = 7.5;
+  double w_knee = 2.75;
+  // Segments of one tube closer than this many indices apart do not interact (0: all do).
+  int intra_tube_exclusion = 20;
+  VdwTorque torque = VdwTorque::Exact;
+
+  double cutoff() const { return 4.0 * segment_length; }
+};
+
+// Energy and generalized forces of one segment pair. f1, f2 forces (eV/nm), t1, t2 torques (eV)
+// on segment 1 and 2; zero beyond the cutoff.
+struct VdwPairResult {
+  double energy = 0;
+  Vec3 f1 = Vec3::Zero(), f2 = Vec3::Zero(), t1 = Vec3::Zero(), t2 = Vec3::Zero();
+};
+
+// x1, x2 centres; b1, b2 unit axes (either sign: the model flips b2 so b1·b2 ≥ 0).
+VdwPairResult vdw_pair(const VdwParams& p, const Vec3& x1, const Vec3& b1, const Vec3& x2,
+                       const Vec3& b2);
+
+// δ(θ) and V(D) on their own, for tests and reports.
+double vdw_delta(const VdwParams& p, double theta);
+double vdw_potential(const VdwParams& p, double d);
+
+// Radial stiffness bound of one pair at centre distance R (eV/nm²), for the critical step.
+double vdw_radial_stiffness(const VdwParams& p, double R);
+
+class AnisotropicVdw final : public ForceModel {
+ public:
+  explicit AnisotropicVdw(VdwParams p = {}) : p_(p) {}
+  std::string_view name() const override { return "anisotropic_vdw"; }
+  double cutoff() const override { return p_.cutoff(); }
+  bool excludes(const Elements& el, std::size_t i, std::size_t j) const override;
+  void compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const override;
+  void add_stiffness(const Elements& el, const NeighborList* pairs,
+                     StiffnessSums& s) const override;
+  const VdwParams& params() const { return p_; }
+
+ private:
+  VdwParams p_;
+};
+
+}  // namespace mdem

@@ -1,0 +1,45 @@
+#pragma once
+// Cell list + Verlet list with a skin (half list: each pair once, j listed under i with i < j).
+// Rebuilt only when some element has moved more than half the skin since the last build.
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "mdem/elements.h"
+
+namespace mdem {
+
+class NeighborList {
+ public:
+  // Pairs closer than cutoff + skin at build time are listed.
+  NeighborList(double cutoff, double skin);
+
+  // Predicate that leaves a pair out of the list (true = exclude). Optional.
+  using Exclusion = std::function<bool(const Elements&, std::size_t, std::size_t)>;
+  void set_exclusion(Exclusion ex) { exclusion_ = std::move(ex); }
+
+  // True when the list must be rebuilt before it can be trusted for el's current positions.
+  bool needs_rebuild(const Elements& el) const;
+  // Builds the list (threaded over cells). Throws std::runtime_error on non-finite positions.
+  void build(const Elements& el);
+
+  double cutoff() const { return cutoff_; }
+  double skin() const { return skin_; }
+  std::size_t builds() const { return builds_; }
+  std::size_t pair_count() const { return neighbors_.size(); }
+  // Largest displacement of any element since the last build (nm).
+  double max_displacement(const Elements& el) const;
+
+  // Neighbours j > i of element i: neighbors()[offsets()[i] .. offsets()[i+1]).
+  const std::vector<std::uint32_t>& offsets() const { return offsets_; }
+  const std::vector<std::uint32_t>& neighbors() const { return neighbors_; }
+
+ private:
+  double cutoff_, skin_;
+  Exclusion exclusion_;
+  std::vector<Vec3> x_at_build_;
+  std::vector<std::uint32_t> offsets_, neighbors_;
+  std::size_t builds_ = 0;
+};
+
+}  // namespace mdem
