@@ -7,8 +7,7 @@ namespace mdem {
 
 namespace {
 void require(bool ok, const char* field, const char* allowed) {
-  if (!ok)
-    throw std::invalid_argument(std::string("element ") + field + ": " + allowed);
+  if (!ok) throw std::invalid_argument(std::string("element ") + field + ": " + allowed);
 }
 }  // namespace
 

@@ -19,7 +19,7 @@ void ForceSink::clear() {
   const int nt = threads();
   const std::size_t n = nt ? force_[0].size() : 0;
   const bool damp = has_damping();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (static_cast <long>(n) >= kParallelMinItems)
   for (std::size_t i = 0; i < n; ++i) {
     for (int k = 0; k < nt; ++k) {
       force_[k][i].setZero();
@@ -38,7 +38,7 @@ EnergyTally ForceSink::reduce(std::vector<Vec3>& f, std::vector<Vec3>& t, std::v
   const int nt = threads();
   const std::size_t n = nt ? force_[0].size() : 0;
   const bool damp = has_damping();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (static_cast <long>(n) >= kParallelMinItems)
   for (std::size_t i = 0; i < n; ++i) {
     Vec3 fi = force_[0][i], ti = torque_[0][i];
     for (int k = 1; k < nt; ++k) {

@@ -9,7 +9,12 @@ namespace mdem {
 Quat quat_from_axis(const Vec3& axis) {
   if (!axis.allFinite() || axis.norm() == 0)
     throw std::invalid_argument("tube axis must be a finite, non-zero vector");
-  return Quat::FromTwoVectors(Vec3::UnitX(), axis.normalized());
+  const Vec3 a = axis.normalized();
+  const double c = a.x();                         // cos of the angle between body x and a
+  if (c < -1.0 + 1e-12) return Quat(0, 0, 0, 1);  // half turn about z
+  // Half-angle form: q = (1 + x·a, x × a) normalised.
+  const Vec3 v = Vec3::UnitX().cross(a);
+  return Quat(1.0 + c, v.x(), v.y(), v.z()).normalized();
 }
 
 ElementInit cnt_segment(const Vec3& x, const Quat& q, int tube, int index) {
@@ -33,7 +38,8 @@ std::vector<std::size_t> add_straight_tube(Elements& el, ParallelBond* bonds,
   const Vec3 step = cnt::kSegmentLength * dir.normalized();
   std::vector<std::size_t> ids;
   ids.reserve(n);
-  for (int k = 0; k < n; ++k) ids.push_back(el.add(cnt_segment(first_centre + k * step, q, tube_id, k)));
+  for (int k = 0; k < n; ++k)
+    ids.push_back(el.add(cnt_segment(first_centre + k * step, q, tube_id, k)));
   if (bonds) {
     const BondStiffness k = cnt_bond_stiffness();
     for (int s = 0; s + 1 < n; ++s)

@@ -24,8 +24,8 @@ struct VdwParams {
   double radius = 0.678;          // r (nm)
   double segment_length = 1.356;  // T (nm); smoothstep cutoff from 3T to 4T
   std::array<double, 5> C = {0.35819, 0.03263, -0.00138, -0.00017, 0.00024};
-  double d_min = 0.4;             // below: V continued linearly (C¹)
-  double w_prefactor = 90.0;      // W(R) = 90 (R/r)^-7.5 for R/r > 2.75
+  double d_min = 0.4;         // below: V continued linearly (C¹)
+  double w_prefactor = 90.0;  // W(R) = 90 (R/r)^-7.5 for R/r > 2.75
   double w_exponent = 7.5;
   double w_knee = 2.75;
   // Segments of one tube closer than this many indices apart do not interact (0: all do).
@@ -51,11 +51,35 @@ double vdw_delta(const VdwParams& p, double theta);
 double vdw_potential(const VdwParams& p, double d);
 
 // Radial stiffness bound of one pair at centre distance R (eV/nm²), for the critical step.
+// Side by side (θ = 90°, δ = 1, the smallest δ) and crossed (γ = 90°, the largest M): the sum of
+// the absolute values of the terms of ∂²(M f_c V)/∂R², with V'' taken at max(D, d_min) (so a pair
+// on the linear overlap branch still counts the stiffness of the branch it leaves).
 double vdw_radial_stiffness(const VdwParams& p, double R);
+// The same bound at the pair's actual δ(θ) (γ = 90° still), and never below
+// vdw_radial_stiffness(p, R): an end-to-end pair (δ up to 1.714) can be much stiffer at a given R
+// than a side-by-side one. Zero beyond the cutoff.
+double vdw_pair_stiffness(const VdwParams& p, const Vec3& x1, const Vec3& b1, const Vec3& x2,
+                          const Vec3& b2);
+
+// Constants derived once from a parameter set (δ as a polynomial in cos 2θ, V and V' at d_min,
+// W below the knee), so the pair kernel needs no pow() or trigonometry.
+struct VdwConstants {
+  explicit VdwConstants(const VdwParams& p);
+  VdwParams p;
+  double four_eps, inv_r, inv_T, cutoff2;
+  std::array<double, 6> delta_poly;  // δ = Σ delta_poly[k] y^k, y = cos 2θ = 2 cos²θ − 1
+  bool fast_lj;                      // α = 9.5, β = 4: no pow()
+  bool fast_w;                       // W exponent 7.5: no pow()
+  double v_dmin, dv_dmin, ddv_dmin;  // V, V', V'' at d_min
+  double w_knee_value;               // W(R) for R/r ≤ knee
+};
+
+VdwPairResult vdw_pair(const VdwConstants& k, const Vec3& x1, const Vec3& b1, const Vec3& x2,
+                       const Vec3& b2);
 
 class AnisotropicVdw final : public ForceModel {
  public:
-  explicit AnisotropicVdw(VdwParams p = {}) : p_(p) {}
+  explicit AnisotropicVdw(VdwParams p = {}) : p_(p), k_(p) {}
   std::string_view name() const override { return "anisotropic_vdw"; }
   double cutoff() const override { return p_.cutoff(); }
   bool excludes(const Elements& el, std::size_t i, std::size_t j) const override;
@@ -66,6 +90,7 @@ class AnisotropicVdw final : public ForceModel {
 
  private:
   VdwParams p_;
+  VdwConstants k_;
 };
 
 }  // namespace mdem

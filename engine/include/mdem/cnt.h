@@ -15,10 +15,10 @@ inline constexpr double kInertia = kMass * kRadius * kRadius;
 inline constexpr double kInertiaPfc = 0.4 * kMass * kRadius * kRadius;
 
 // Parallel bond ring (Table 2-1).
-inline constexpr double kBondArea = 1.427;     // nm²
-inline constexpr double kBondI = 0.348;        // nm⁴
-inline constexpr double kBondJ = 2.0 * kBondI; // nm⁴
-inline constexpr double kBondKn = 4740.0;      // eV/nm⁴ (normal stiffness per area)
-inline constexpr double kBondKs = 2110.0;      // eV/nm⁴ (shear stiffness per area)
+inline constexpr double kBondArea = 1.427;      // nm²
+inline constexpr double kBondI = 0.348;         // nm⁴
+inline constexpr double kBondJ = 2.0 * kBondI;  // nm⁴
+inline constexpr double kBondKn = 4740.0;       // eV/nm⁴ (normal stiffness per area)
+inline constexpr double kBondKs = 2110.0;       // eV/nm⁴ (shear stiffness per area)
 
 }  // namespace mdem::cnt

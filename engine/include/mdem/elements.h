@@ -26,12 +26,12 @@ struct ElementInit {
   Vec3 x = Vec3::Zero();
   Quat q = Quat::Identity();
   Vec3 v = Vec3::Zero();
-  Vec3 w = Vec3::Zero();   // angular velocity, world frame (rad/ps)
-  double mass = 0;         // eV·ps²/nm²
+  Vec3 w = Vec3::Zero();        // angular velocity, world frame (rad/ps)
+  double mass = 0;              // eV·ps²/nm²
   Vec3 inertia = Vec3::Zero();  // principal moments in the body frame (eV·ps²)
-  double radius = 0;       // nm
-  std::int32_t tube = -1;  // tube id for CNT segments, -1 otherwise
-  std::int32_t index = -1; // index along the tube
+  double radius = 0;            // nm
+  std::int32_t tube = -1;       // tube id for CNT segments, -1 otherwise
+  std::int32_t index = -1;      // index along the tube
 };
 
 struct Elements {

@@ -19,8 +19,7 @@ enum class EnergyTerm : int {
 inline constexpr int kEnergyTermCount = static_cast<int>(EnergyTerm::kCount);
 
 inline constexpr std::array<std::string_view, kEnergyTermCount> kEnergyTermNames = {
-    "bond_tension", "bond_shear", "bond_bending", "bond_torsion", "vdw", "nanoparticle",
-    "contact"};
+    "bond_tension", "bond_shear", "bond_bending", "bond_torsion", "vdw", "nanoparticle", "contact"};
 
 // Potential energies of one force evaluation, by component.
 struct EnergyTally {
@@ -40,12 +39,12 @@ struct EnergyTally {
 
 // The running balance of a simulation.
 struct EnergyLedger {
-  EnergyTally potential;           // at the current step
+  EnergyTally potential;  // at the current step
   double kinetic_translational = 0;
   double kinetic_rotational = 0;
-  double external_work = 0;        // work done on the system by external loads and constraints
-  double dissipated = 0;           // energy removed by damping (≥ 0)
-  double initial_total = 0;        // stored + kinetic at step 0
+  double external_work = 0;  // work done on the system by external loads and constraints
+  double dissipated = 0;     // energy removed by damping (≥ 0)
+  double initial_total = 0;  // stored + kinetic at step 0
 
   double kinetic() const { return kinetic_translational + kinetic_rotational; }
   double total() const { return potential.total_stored() + kinetic(); }

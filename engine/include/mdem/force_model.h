@@ -17,6 +17,10 @@ namespace mdem {
 
 class NeighborList;
 
+// Loops over fewer items than this run on one thread: waking a team costs more than it saves, and
+// on a loaded machine spinning threads can cost far more.
+inline constexpr long kParallelMinItems = 2048;
+
 // Per-thread accumulation buffers, reduced into the system's force arrays after all models ran.
 // Conservative forces go to force()/torque(); velocity-dependent damping forces go to
 // damping_force()/damping_torque(), so the integrator can book the energy they dissipate.
@@ -44,15 +48,15 @@ class ForceSink {
 
 // Upper bounds of the stiffness each element sees, for the critical time step (model.md §7).
 // Per element, summed over its interactions: kt translational, kr rotational (eV/rad), ktr the
-// translation-rotation coupling (eV/nm/rad, e.g. a shear spring times its lever arm), and the
-// largest viscous damping ratio among its interactions.
+// translation-rotation coupling (eV/nm/rad, e.g. a shear spring times its lever arm), and c the
+// sum of the viscous dashpot coefficients acting on it (eV·ps/nm²).
 struct StiffnessSums {
-  std::vector<double> kt, kr, ktr, damping_ratio;
+  std::vector<double> kt, kr, ktr, c;
   void reset(std::size_t n) {
     kt.assign(n, 0.0);
     kr.assign(n, 0.0);
     ktr.assign(n, 0.0);
-    damping_ratio.assign(n, 0.0);
+    c.assign(n, 0.0);
   }
   void add_pair(std::size_t i, std::size_t j, double k_t, double k_r, double k_tr) {
     kt[i] += k_t;

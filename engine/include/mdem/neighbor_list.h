@@ -40,6 +40,13 @@ class NeighborList {
   std::vector<Vec3> x_at_build_;
   std::vector<std::uint32_t> offsets_, neighbors_;
   std::size_t builds_ = 0;
+
+  // Scratch of the build, kept between builds so a rebuild allocates nothing once warm.
+  std::vector<std::uint32_t> cell_of_;     // cell of each element
+  std::vector<std::uint32_t> cell_start_;  // CSR over cells: elements of cell c are
+  std::vector<std::uint32_t> cell_elem_;   //   cell_elem_[cell_start_[c] .. cell_start_[c+1])
+  std::vector<Vec3> cell_x_;               // positions in cell order (cache-friendly scan)
+  std::vector<std::vector<std::uint32_t>> thread_neighbors_;  // per-thread output
 };
 
 }  // namespace mdem

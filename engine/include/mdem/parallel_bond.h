@@ -28,9 +28,9 @@ BondStiffness cnt_bond_stiffness();
 
 struct Bond {
   std::uint32_t i = 0, j = 0;
-  Vec3 ci = Vec3::Zero(), cj = Vec3::Zero();  // body-frame vectors, centre -> bond point
+  Vec3 ci = Vec3::Zero(), cj = Vec3::Zero();    // body-frame vectors, centre -> bond point
   Vec3 ni = Vec3::UnitX(), nj = Vec3::UnitX();  // body-frame unit bond direction i -> j
-  Quat q_rel0 = Quat::Identity();             // q_i⁻¹ q_j at bonding
+  Quat q_rel0 = Quat::Identity();               // q_i⁻¹ q_j at bonding
   BondStiffness k;
 };
 
@@ -40,10 +40,10 @@ struct Bond {
 Bond make_bond(const Elements& el, std::uint32_t i, std::uint32_t j, const BondStiffness& k);
 
 struct BondDeformation {
-  Vec3 n = Vec3::UnitX();  // current bond axis
-  double u_n = 0;          // normal (stretch) displacement, positive in tension (nm)
-  Vec3 u_s = Vec3::Zero(); // shear displacement (nm)
-  double theta_t = 0;      // twist angle (rad)
+  Vec3 n = Vec3::UnitX();       // current bond axis
+  double u_n = 0;               // normal (stretch) displacement, positive in tension (nm)
+  Vec3 u_s = Vec3::Zero();      // shear displacement (nm)
+  double theta_t = 0;           // twist angle (rad)
   Vec3 theta_b = Vec3::Zero();  // bending rotation vector (rad)
 };
 
@@ -55,8 +55,7 @@ struct BondResult {
 
 BondDeformation bond_deformation(const Bond& b, const Vec3& xi, const Quat& qi, const Vec3& xj,
                                  const Quat& qj);
-BondResult bond_eval(const Bond& b, const Vec3& xi, const Quat& qi, const Vec3& xj,
-                     const Quat& qj);
+BondResult bond_eval(const Bond& b, const Vec3& xi, const Quat& qi, const Vec3& xj, const Quat& qj);
 
 class ParallelBond final : public ForceModel {
  public:

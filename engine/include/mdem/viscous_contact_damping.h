@@ -1,0 +1,33 @@
+#pragma once
+// Viscous dashpots in CNT–CNT vdW contacts (thesis Eq. 33–34, model.md §4): on every pair within
+// the vdW cutoff, a force −c·v_rel on the relative centre velocity (normal and shear alike, since
+// both dashpots use the same k), c = 2ψ√(m_eff k), m_eff the pair's reduced mass.
+#include "mdem/force_model.h"
+
+namespace mdem {
+
+struct ContactDampingParams {
+  double ratio = 0.03;            // ψ (thesis: 0.03)
+  double stiffness = 100.0;       // k (eV/nm²)
+  double cutoff = 4 * 1.356;      // acts on pairs closer than this (nm): the vdW cutoff 4T
+  int intra_tube_exclusion = 20;  // same meaning as VdwParams::intra_tube_exclusion
+};
+
+class ViscousContactDamping final : public ForceModel {
+ public:
+  explicit ViscousContactDamping(ContactDampingParams p);
+  std::string_view name() const override { return "viscous_contact_damping"; }
+  double cutoff() const override { return p_.cutoff; }
+  bool dissipative() const override { return true; }
+  bool excludes(const Elements& el, std::size_t i, std::size_t j) const override;
+  void compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const override;
+  void add_stiffness(const Elements& el, const NeighborList* pairs,
+                     StiffnessSums& s) const override;
+  const ContactDampingParams& params() const { return p_; }
+
+ private:
+  double coefficient(const Elements& el, std::size_t i, std::size_t j) const;
+  ContactDampingParams p_;
+};
+
+}  // namespace mdem
