@@ -1,0 +1,83 @@
+// Subcommand dispatch of `mdem`.
+#include "mdem/cli.h"
+
+#include <exception>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#ifndef MDEM_VERSION
+#define MDEM_VERSION "unknown"
+#endif
+
+namespace mdem::cli {
+namespace {
+
+void print_usage(std::ostream& os) {
+  os << "mdem " MDEM_VERSION
+        " - mesoscopic distinct element simulations of carbon-nanotube mechanics\n"
+        "\n"
+        "Usage: mdem <command> [flags]\n"
+        "\n"
+        "Commands:\n"
+        "  run <kind>   run a job in this process (e.g. `mdem run bundle`)\n"
+        "  probe        evaluate one contact model for two elements and print JSON\n"
+        "  help [cmd]   show this help, or the help of one command\n"
+        "\n"
+        "Flags:\n"
+        "  -h, --help   show this help\n"
+        "  --version    print the version\n"
+        "\n"
+        "Run `mdem <command> --help` for the flags of a command.\n";
+}
+
+int dispatch(const std::vector<std::string>& argv_tail, std::ostream& out, std::ostream& err) {
+  if (argv_tail.empty()) {
+    print_usage(err);
+    return kUsage;
+  }
+  const std::string& cmd = argv_tail.front();
+  const std::vector<std::string> rest(argv_tail.begin() + 1, argv_tail.end());
+  if (cmd == "probe") return probe(rest, out, err);
+  if (cmd == "run") return run(rest, out, err);
+  if (cmd == "--help" || cmd == "-h") {
+    print_usage(out);
+    return kOk;
+  }
+  if (cmd == "help") {
+    if (rest.empty()) {
+      print_usage(out);
+      return kOk;
+    }
+    if (rest.front() == "probe") return probe({"--help"}, out, err);
+    if (rest.front() == "run") return run({"--help"}, out, err);
+    err << "mdem help: unknown command '" << rest.front() << "'\n\n";
+    print_usage(err);
+    return kUsage;
+  }
+  if (cmd == "--version" || cmd == "version") {
+    out << "mdem " MDEM_VERSION "\n";
+    return kOk;
+  }
+  if (!cmd.empty() && cmd.front() == '-')
+    err << "mdem: unknown flag '" << cmd << "'\n\n";
+  else
+    err << "mdem: unknown command '" << cmd << "'\n\n";
+  print_usage(err);
+  return kUsage;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> args;
+  for (int i = 1; i < argc; ++i) args.emplace_back(argv[i]);
+  try {
+    return dispatch(args, std::cout, std::cerr);
+  } catch (const std::exception& e) {
+    std::cerr << "mdem: error: " << e.what() << "\n";
+    return kJobFailed;
+  }
+}
+
+}  // namespace mdem::cli
