@@ -433,10 +433,12 @@ TEST(ParallelBond, MakeBondValidation) {
 TEST(ParallelBond, ComputeOnTubeMatchesBondSum) {
   Elements el;
   ParallelBond pb;
+  // Long enough that the loop runs threaded (more bonds than kParallelMinItems).
+  const int segments = static_cast<int>(kParallelMinItems) + 11;
   const std::vector<std::size_t> ids =
-      add_straight_tube(el, &pb, Vec3(1, -2, 0.5), Vec3(1, 1, 0.3), 10, 0);
-  ASSERT_EQ(ids.size(), 10u);
-  ASSERT_EQ(pb.bonds().size(), 9u);
+      add_straight_tube(el, &pb, Vec3(1, -2, 0.5), Vec3(1, 1, 0.3), segments, 0);
+  ASSERT_EQ(ids.size(), static_cast<std::size_t>(segments));
+  ASSERT_EQ(pb.bonds().size(), static_cast<std::size_t>(segments - 1));
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(-1, 1);
   for (std::size_t e = 0; e < el.size(); ++e) {

@@ -12,7 +12,10 @@ namespace mdem {
 
 enum class VdwTorque {
   Exact,  // forces and torques are the exact gradient of U (energy-conserving), the default
-  Pfc,    // Table 2-3 literally: radial + shear force, aligning moment −∂U/∂γ only
+  // Table 2-3 literally: radial + shear force, aligning moment −∂U/∂γ only. Drops the torque
+  // from θ's dependence on the axes: not conservative under rotation, and the pair's angular
+  // momentum is not balanced.
+  Pfc,
 };
 
 struct VdwParams {
@@ -31,6 +34,14 @@ struct VdwParams {
   // Segments of one tube closer than this many indices apart do not interact (0: all do).
   int intra_tube_exclusion = 20;
   VdwTorque torque = VdwTorque::Exact;
+  // The model flips b2 by s = sign(b1·b2), which makes U jump where b1·b2 = 0 (unless the centre
+  // line is perpendicular to an axis). 0: the literal model. > 0: inside |b1·b2| < flip_blend,
+  // cos²θ is a C¹ smoothstep blend of its two signed values, so U is continuous (C¹) everywhere
+  // and an undamped run conserves energy through γ = 90° as well. The blend's torque scales as
+  // 1/flip_blend, so a narrow window needs a small step: 0.2 (γ within 11.5° of 90°) is tested at
+  // 5–10 fs; 0.02 blows up at 10 fs. Must be in [0, 0.5]. Default 0.2, so the default model
+  // conserves energy (model.md §4 asks for that); flip_blend = 0 is the thesis's literal form.
+  double flip_blend = 0.2;
 
   double cutoff() const { return 4.0 * segment_length; }
 };
@@ -42,7 +53,11 @@ struct VdwPairResult {
   Vec3 f1 = Vec3::Zero(), f2 = Vec3::Zero(), t1 = Vec3::Zero(), t2 = Vec3::Zero();
 };
 
-// x1, x2 centres; b1, b2 unit axes (either sign: the model flips b2 so b1·b2 ≥ 0).
+// x1, x2 centres; b1, b2 unit axes (either sign: the model flips b2 so b1·b2 ≥ 0, which makes U
+// jump where b1·b2 changes sign unless the centre line is perpendicular to an axis — a property
+// of the published model; see flip_blend). Coincident centres (R < 1e-12 nm) give the finite
+// energy M·V(−2), zero force and the aligning torque; a NaN input propagates into the result;
+// an infinitely distant pair reads as beyond the cutoff.
 VdwPairResult vdw_pair(const VdwParams& p, const Vec3& x1, const Vec3& b1, const Vec3& x2,
                        const Vec3& b2);
 
