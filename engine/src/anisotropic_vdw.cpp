@@ -355,9 +355,15 @@ void AnisotropicVdw::compute(const Elements& el, const NeighborList* pairs, Forc
   const int excl = p_.intra_tube_exclusion;
   const VdwConstants& k = k_;
   const int nt = sink.threads();
+  // The pair loop is heavy: worth a team from a few thousand listed pairs on.
+  const bool threaded = static_cast<long>(pairs->pair_count()) >= 2 * kParallelMinItems;
+  axes_.resize(el.size());
+  Vec3* axes = axes_.data();
 
-#pragma omp parallel num_threads(nt) if (n >= kParallelMinItems)
+#pragma omp parallel num_threads(nt) if (threaded)
   {
+#pragma omp for schedule(static)
+    for (long i = 0; i < n; ++i) axes[i] = axis_of(el.q[i]);
     const int tid = omp_get_thread_num();
     Vec3* f = sink.force(tid);
     Vec3* t = sink.torque(tid);
@@ -367,7 +373,7 @@ void AnisotropicVdw::compute(const Elements& el, const NeighborList* pairs, Forc
       const std::uint32_t begin = off[i], end = off[i + 1];
       if (begin == end || el.kind[i] != ElementKind::CntSegment) continue;
       const Vec3 xi = el.x[i];
-      const Vec3 bi = axis_of(el.q[i]);
+      const Vec3 bi = axes[i];
       const std::int32_t tube_i = el.tube[i], index_i = el.index[i];
       Vec3 fi = Vec3::Zero(), ti = Vec3::Zero();
       for (std::uint32_t m = begin; m < end; ++m) {
@@ -377,7 +383,7 @@ void AnisotropicVdw::compute(const Elements& el, const NeighborList* pairs, Forc
         if (el.kind[j] != ElementKind::CntSegment) continue;
         if (tube_i >= 0 && el.tube[j] == tube_i && std::abs(el.index[j] - index_i) < excl) continue;
         VdwPairResult r;
-        if (!eval_pair(k, xi, bi, el.x[j], axis_of(el.q[j]), r)) continue;
+        if (!eval_pair(k, xi, bi, el.x[j], axes[j], r)) continue;
         energy += r.energy;
         fi += r.f1;
         ti += r.t1;

@@ -5,6 +5,7 @@
 //
 // continued linearly in D below D_min (C¹), so overlapping tubes feel a finite repulsion.
 #include <array>
+#include <vector>
 
 #include "mdem/force_model.h"
 
@@ -106,6 +107,8 @@ class AnisotropicVdw final : public ForceModel {
  private:
   VdwParams p_;
   VdwConstants k_;
+  // Segment axes of the current evaluation, computed once per step rather than once per pair.
+  mutable std::vector<Vec3> axes_;
 };
 
 }  // namespace mdem
