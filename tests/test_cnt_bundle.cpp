@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "mdem/anisotropic_vdw.h"
 #include "mdem/bundle_scene.h"
@@ -112,6 +113,9 @@ TEST(CntBundle, VibratingSpinningBundleConservesEnergyWithoutDrift) {
   const double slope = (n * ste - st * se) / (n * stt - st * st);
   const double drift = std::abs(slope) * (t.back() - t.front());
   EXPECT_LT(drift, 1e-3 * ke_scale) << "drift " << drift << " eV, kinetic scale " << ke_scale;
+  std::printf(
+      "energy trend over %ld steps: %.3g eV; kinetic scale %.4g eV; ratio %.2e; dt %.2f fs\n",
+      steps, drift, ke_scale, drift / ke_scale, sys.dt() * 1000);
   // The bundle really moved and rotated: kinetic energy of both kinds was present.
   EXPECT_GT(sys.energy().kinetic_rotational, 0.1 * ke_scale);
   // What remains is Verlet's bounded O(dt²) offset of the measured energy, a few % at the
