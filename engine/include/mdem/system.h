@@ -102,7 +102,7 @@ class System {
   // |W_ext − (ΔE + E_diss)| over the energy in play: the largest of the initial kinetic energy,
   // the work put in, the energy dissipated and the stored energy released.
   double energy_balance_error() const;
-  // Forces of the last evaluation (internal, conservative + damping), per element.
+  // Damping forces of the last evaluation (contact dashpots + local damping), per element.
   const std::vector<Vec3>& damping_forces() const { return fd_; }
   const NeighborList* neighbors() const { return nlist_.get(); }
 
