@@ -339,9 +339,7 @@ double vdw_pair_stiffness(const VdwParams& p, const Vec3& x1, const Vec3& b1, co
 }
 
 bool AnisotropicVdw::excludes(const Elements& el, std::size_t i, std::size_t j) const {
-  if (el.kind[i] != ElementKind::CntSegment || el.kind[j] != ElementKind::CntSegment) return true;
-  return el.tube[i] >= 0 && el.tube[i] == el.tube[j] &&
-         std::abs(el.index[i] - el.index[j]) < p_.intra_tube_exclusion;
+  return el.cnt_pair_excluded(i, j, p_.intra_tube_exclusion);
 }
 
 void AnisotropicVdw::compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const {
@@ -374,14 +372,12 @@ void AnisotropicVdw::compute(const Elements& el, const NeighborList* pairs, Forc
       if (begin == end || el.kind[i] != ElementKind::CntSegment) continue;
       const Vec3 xi = el.x[i];
       const Vec3 bi = axes[i];
-      const std::int32_t tube_i = el.tube[i], index_i = el.index[i];
       Vec3 fi = Vec3::Zero(), ti = Vec3::Zero();
       for (std::uint32_t m = begin; m < end; ++m) {
         const std::uint32_t j = nb[m];
         // The list is shared by all pair models, so this model's exclusion is applied here
         // (a few integer compares).
-        if (el.kind[j] != ElementKind::CntSegment) continue;
-        if (tube_i >= 0 && el.tube[j] == tube_i && std::abs(el.index[j] - index_i) < excl) continue;
+        if (el.cnt_pair_excluded(i, j, excl)) continue;
         VdwPairResult r;
         if (!eval_pair(k, xi, bi, el.x[j], axes[j], r)) continue;
         energy += r.energy;

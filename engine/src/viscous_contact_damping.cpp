@@ -23,8 +23,7 @@ ViscousContactDamping::ViscousContactDamping(ContactDampingParams p) : p_(p) {
 }
 
 bool ViscousContactDamping::excludes(const Elements& el, std::size_t i, std::size_t j) const {
-  if (el.kind[i] != ElementKind::CntSegment || el.kind[j] != ElementKind::CntSegment) return true;
-  return el.tube[i] == el.tube[j] && std::abs(el.index[i] - el.index[j]) < p_.intra_tube_exclusion;
+  return el.cnt_pair_excluded(i, j, p_.intra_tube_exclusion);
 }
 
 double ViscousContactDamping::coefficient(const Elements& el, std::size_t i, std::size_t j) const {

@@ -4,6 +4,7 @@
 // the integrator).
 #include <array>
 #include <cstdint>
+#include <cstdlib>
 #include <vector>
 
 #include "mdem/math.h"
@@ -73,6 +74,13 @@ struct Elements {
   }
 
   void fix_all(std::size_t i) { dof[i].fill(DofMode::Fixed); }
+
+  // Whether a CNT-CNT pair model leaves (i, j) out: not both CNT segments, or segments of one
+  // tube fewer than `exclusion` indices apart (model.md §4's intra-tube exclusion).
+  bool cnt_pair_excluded(std::size_t i, std::size_t j, int exclusion) const {
+    if (kind[i] != ElementKind::CntSegment || kind[j] != ElementKind::CntSegment) return true;
+    return tube[i] >= 0 && tube[i] == tube[j] && std::abs(index[i] - index[j]) < exclusion;
+  }
 };
 
 }  // namespace mdem
