@@ -50,6 +50,59 @@ Vec3 world_inertia_inverse_times(const Quat& q, const Vec3& I, const Vec3& L) {
   return q * ((q.conjugate() * L).cwiseQuotient(I));
 }
 
+// First half kick of one scalar DOF with inertia m (a mass, or an isotropic moment of inertia):
+// the force at t_n acts for h = dt/2. Books the damping power at v_n, and half of the coming
+// drift's work of the external load (free DOF) or of the constraint (prescribed DOF, including
+// the kinetic energy it injects when its velocity changes).
+inline void first_half_kick(DofMode mode, double& v, double F, double F_ext, double F_damp,
+                            double v_presc, double m, double inv_m, double h, double& work,
+                            double& diss) {
+  const double v0 = v;
+  diss -= F_damp * v0 * h;
+  switch (mode) {
+    case DofMode::Free:
+      v = v0 + h * (F + F_ext + F_damp) * inv_m;
+      work += F_ext * v * h;
+      break;
+    case DofMode::Prescribed:
+      work += 0.5 * m * (v_presc * v_presc - v0 * v0);
+      v = v_presc;
+      work -= (F + F_damp) * v * h;
+      break;
+    case DofMode::Fixed:
+      v = 0;
+      break;
+  }
+}
+
+// Second half kick of one scalar DOF with the forces at t_{n+1}: the other half of the drift's
+// work, then the damping power at v_{n+1}.
+inline void second_half_kick(DofMode mode, double& v, double F, double F_ext, double F_damp,
+                             double v_presc, double m, double inv_m, double h, double& work,
+                             double& diss) {
+  switch (mode) {
+    case DofMode::Free:
+      work += F_ext * v * h;
+      v += h * (F + F_ext + F_damp) * inv_m;
+      break;
+    case DofMode::Prescribed:
+      work -= (F + F_damp) * v * h;
+      work += 0.5 * m * (v_presc * v_presc - v * v);
+      v = v_presc;
+      break;
+    case DofMode::Fixed:
+      v = 0;
+      break;
+  }
+  diss -= F_damp * v * h;
+}
+
+// Half kick of the angular momentum of an anisotropic body (all rotational DOFs free).
+inline void kick_anisotropic(const Quat& q, const Vec3& I, Vec3& w, const Vec3& torque, double h) {
+  const Vec3 L = world_inertia_times(q, I, w) + h * torque;
+  w = world_inertia_inverse_times(q, I, L);
+}
+
 }  // namespace
 
 System::System(Elements el, IntegratorSettings s) : el_(std::move(el)), settings_(s) {}
@@ -247,51 +300,18 @@ void System::run(long nsteps) {
 #pragma omp parallel for schedule(static) reduction(+ : work, diss) if (n >= kParallelMinItems)
     for (long i = 0; i < n; ++i) {
       const auto& dof = E.dof[i];
-      const double im = E.inv_mass[i];
-      for (int k = 0; k < 3; ++k) {
-        const double vk0 = E.v[i][k];
-        diss -= fd_[i][k] * vk0 * h;
-        switch (dof[k]) {
-          case DofMode::Free:
-            E.v[i][k] = vk0 + h * (E.f[i][k] + E.f_ext[i][k] + fd_[i][k]) * im;
-            work += 0.5 * E.f_ext[i][k] * E.v[i][k] * dt;
-            break;
-          case DofMode::Prescribed:
-            work += 0.5 * E.mass[i] * (E.v_prescribed[i][k] * E.v_prescribed[i][k] - vk0 * vk0);
-            E.v[i][k] = E.v_prescribed[i][k];
-            work -= 0.5 * (E.f[i][k] + fd_[i][k]) * E.v[i][k] * dt;
-            break;
-          case DofMode::Fixed:
-            E.v[i][k] = 0;
-            break;
-        }
-      }
+      for (int k = 0; k < 3; ++k)
+        first_half_kick(dof[k], E.v[i][k], E.f[i][k], E.f_ext[i][k], fd_[i][k],
+                        E.v_prescribed[i][k], E.mass[i], E.inv_mass[i], h, work, diss);
       if (E.is_isotropic(i)) {
-        const double iI = 1.0 / E.inertia[i].x();
-        for (int k = 0; k < 3; ++k) {
-          const double wk0 = E.w[i][k];
-          diss -= td_[i][k] * wk0 * h;
-          switch (dof[k + 3]) {
-            case DofMode::Free:
-              E.w[i][k] = wk0 + h * (E.t[i][k] + E.t_ext[i][k] + td_[i][k]) * iI;
-              work += 0.5 * E.t_ext[i][k] * E.w[i][k] * dt;
-              break;
-            case DofMode::Prescribed:
-              work += 0.5 / iI * (E.w_prescribed[i][k] * E.w_prescribed[i][k] - wk0 * wk0);
-              E.w[i][k] = E.w_prescribed[i][k];
-              work -= 0.5 * (E.t[i][k] + td_[i][k]) * E.w[i][k] * dt;
-              break;
-            case DofMode::Fixed:
-              E.w[i][k] = 0;
-              break;
-          }
-        }
+        const double I = E.inertia[i].x(), iI = 1.0 / I;
+        for (int k = 0; k < 3; ++k)
+          first_half_kick(dof[k + 3], E.w[i][k], E.t[i][k], E.t_ext[i][k], td_[i][k],
+                          E.w_prescribed[i][k], I, iI, h, work, diss);
       } else {  // anisotropic: all rotational DOFs free (checked in initialize)
         diss -= td_[i].dot(E.w[i]) * h;
-        Vec3 L = world_inertia_times(E.q[i], E.inertia[i], E.w[i]);
-        L += h * (E.t[i] + E.t_ext[i] + td_[i]);
-        E.w[i] = world_inertia_inverse_times(E.q[i], E.inertia[i], L);
-        work += 0.5 * E.t_ext[i].dot(E.w[i]) * dt;
+        kick_anisotropic(E.q[i], E.inertia[i], E.w[i], E.t[i] + E.t_ext[i] + td_[i], h);
+        work += E.t_ext[i].dot(E.w[i]) * h;
       }
     }
 
@@ -335,52 +355,17 @@ void System::run(long nsteps) {
 #pragma omp parallel for schedule(static) reduction(+ : work, diss) reduction(max : bad) if (n >= kParallelMinItems)
     for (long i = 0; i < n; ++i) {
       const auto& dof = E.dof[i];
-      const double im = E.inv_mass[i];
-      for (int k = 0; k < 3; ++k) {
-        switch (dof[k]) {
-          case DofMode::Free:
-            work += 0.5 * E.f_ext[i][k] * E.v[i][k] * dt;
-            E.v[i][k] += h * (E.f[i][k] + E.f_ext[i][k] + fd_[i][k]) * im;
-            break;
-          case DofMode::Prescribed: {
-            work -= 0.5 * (E.f[i][k] + fd_[i][k]) * E.v[i][k] * dt;
-            const double vn = E.v_prescribed[i][k];
-            work += 0.5 * E.mass[i] * (vn * vn - E.v[i][k] * E.v[i][k]);
-            E.v[i][k] = vn;
-            break;
-          }
-          case DofMode::Fixed:
-            E.v[i][k] = 0;
-            break;
-        }
-        diss -= fd_[i][k] * E.v[i][k] * h;
-      }
+      for (int k = 0; k < 3; ++k)
+        second_half_kick(dof[k], E.v[i][k], E.f[i][k], E.f_ext[i][k], fd_[i][k],
+                         E.v_prescribed[i][k], E.mass[i], E.inv_mass[i], h, work, diss);
       if (E.is_isotropic(i)) {
-        const double I = E.inertia[i].x();
-        for (int k = 0; k < 3; ++k) {
-          switch (dof[k + 3]) {
-            case DofMode::Free:
-              work += 0.5 * E.t_ext[i][k] * E.w[i][k] * dt;
-              E.w[i][k] += h * (E.t[i][k] + E.t_ext[i][k] + td_[i][k]) / I;
-              break;
-            case DofMode::Prescribed: {
-              work -= 0.5 * (E.t[i][k] + td_[i][k]) * E.w[i][k] * dt;
-              const double wn = E.w_prescribed[i][k];
-              work += 0.5 * I * (wn * wn - E.w[i][k] * E.w[i][k]);
-              E.w[i][k] = wn;
-              break;
-            }
-            case DofMode::Fixed:
-              E.w[i][k] = 0;
-              break;
-          }
-          diss -= td_[i][k] * E.w[i][k] * h;
-        }
+        const double I = E.inertia[i].x(), iI = 1.0 / I;
+        for (int k = 0; k < 3; ++k)
+          second_half_kick(dof[k + 3], E.w[i][k], E.t[i][k], E.t_ext[i][k], td_[i][k],
+                           E.w_prescribed[i][k], I, iI, h, work, diss);
       } else {
-        work += 0.5 * E.t_ext[i].dot(E.w[i]) * dt;
-        Vec3 L = world_inertia_times(E.q[i], E.inertia[i], E.w[i]);
-        L += h * (E.t[i] + E.t_ext[i] + td_[i]);
-        E.w[i] = world_inertia_inverse_times(E.q[i], E.inertia[i], L);
+        work += E.t_ext[i].dot(E.w[i]) * h;
+        kick_anisotropic(E.q[i], E.inertia[i], E.w[i], E.t[i] + E.t_ext[i] + td_[i], h);
         diss -= td_[i].dot(E.w[i]) * h;
       }
       if (!E.v[i].allFinite() || !E.w[i].allFinite()) bad = std::max(bad, i);
