@@ -1,0 +1,75 @@
+#pragma once
+// Job specs (proto/mdem/v1/job.proto): loading from JSON/YAML through Protobuf's JSON mapping,
+// defaults and validation. Independent of the engine; the engine never sees protobuf.
+//
+// Typical use: finalize(load_file(path)) -> a spec with every default filled in and every value
+// checked, or a SpecError that lists each bad field with its allowed range.
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "mdem/v1/job.pb.h"
+
+namespace mdem::spec {
+
+// One problem with a spec. field: the dotted proto path ("twist.torque_nn_nm",
+// "twist.line_defects[1].width", "run.dt_ps"), "kind" for a missing job kind, or "json", "yaml",
+// "file" for input that could not be read or parsed.
+struct FieldError {
+  std::string field;
+  std::string message;
+};
+
+// Thrown by finalize and the parsers. what(): every error, one per line, "field: message".
+class SpecError : public std::invalid_argument {
+ public:
+  explicit SpecError(std::vector<FieldError> errors);
+  const std::vector<FieldError>& errors() const { return errors_; }
+
+ private:
+  std::vector<FieldError> errors_;
+};
+
+// Largest spec text accepted by parse_json, parse_yaml and load_file.
+inline constexpr std::size_t kMaxSpecBytes = std::size_t{16} << 20;
+
+// Fills every unset optional field (run, outputs, the twist spec and each of its line defects)
+// with its default; boundary UNSPECIFIED becomes CONSTANT_MOMENT. run.dt_ps and twist.spacing_nm
+// stay unset: they mean "automatic".
+void apply_defaults(mdem::v1::JobSpec& spec);
+
+// Every problem of the spec, not just the first; empty if valid. Unset fields count as their
+// defaults, so this works before or after apply_defaults.
+std::vector<FieldError> validate(const mdem::v1::JobSpec& spec);
+
+// apply_defaults, then validate; throws SpecError listing all errors.
+mdem::v1::JobSpec finalize(mdem::v1::JobSpec spec);
+
+// Protobuf JSON mapping, unknown fields refused. Throws SpecError (field "json") carrying
+// protobuf's parser message, which names the offending field. Does not apply defaults.
+mdem::v1::JobSpec parse_json(std::string_view text);
+
+// YAML -> JSON text -> the JSON mapping. Plain scalars: null/~ -> null, true/false -> bool,
+// numbers -> numbers, .nan/.inf/-.inf -> "NaN"/"Infinity"/"-Infinity", anything else (and every
+// scalar of a string field, so `name: 2024` is a name) -> string; quoted scalars stay strings.
+// Throws SpecError (field "yaml") with line and column for a syntax error, a duplicate key or a
+// document that is not one mapping. Does not apply defaults.
+mdem::v1::JobSpec parse_yaml(std::string_view text);
+
+// Reads a .json, .yaml or .yml file (by extension, case-insensitive) and parses it. Throws
+// SpecError (field "file") naming the path for a missing, unreadable or non-regular file, another
+// extension, or a file over kMaxSpecBytes. Does not apply defaults.
+mdem::v1::JobSpec load_file(const std::string& path);
+
+// JSON with the proto field names; every set field is printed, including zeros and false.
+std::string to_json(const mdem::v1::JobSpec& spec, bool pretty);
+
+// round(length_nm / 1.356) with the default length when unset; at least 1.
+int twist_segments(const mdem::v1::TwistSpec& twist);
+
+// 3N^2 - 3N + 1 tubes of N hexagon layers (0 for N < 1).
+int hex_tube_count(int layers);
+
+}  // namespace mdem::spec
