@@ -46,8 +46,13 @@ void ViscousContactDamping::compute(const Elements& el, const NeighborList* pair
     for (long i = 0; i < n; ++i) {
       for (std::uint32_t k = off[i]; k < off[i + 1]; ++k) {
         const std::uint32_t j = nb[k];
-        if ((el.x[j] - el.x[i]).squaredNorm() >= rc2) continue;
-        const Vec3 f = -coefficient(el, i, j) * (el.v[j] - el.v[i]);  // on j
+        const Vec3 d = el.x[j] - el.x[i];
+        const double r2 = d.squaredNorm();
+        if (r2 >= rc2 || r2 == 0) continue;
+        // Along the centre line only: a rigid motion of the pair (translation or rotation) has
+        // no relative velocity along it, so it is not damped.
+        const Vec3 n = d / std::sqrt(r2);
+        const Vec3 f = -coefficient(el, i, j) * n.dot(el.v[j] - el.v[i]) * n;  // on j
         fd[j] += f;
         fd[i] -= f;
       }

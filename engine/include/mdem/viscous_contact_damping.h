@@ -1,7 +1,14 @@
 #pragma once
 // Viscous dashpots in CNT–CNT vdW contacts (thesis Eq. 33–34, model.md §4): on every pair within
-// the vdW cutoff, a force −c·v_rel on the relative centre velocity (normal and shear alike, since
-// both dashpots use the same k), c = 2ψ√(m_eff k), m_eff the pair's reduced mass.
+// the vdW cutoff, a force −c·(n·v_rel)·n along the centre line n, c = 2ψ√(m_eff k), m_eff the
+// pair's reduced mass.
+//
+// Only the normal dashpot: the thesis's shear dashpot on the relative centre velocity damps a
+// rigid rotation (a rope turning as a whole meets a drag growing with the pair distance), and on
+// the relative velocity at a contact point the vdW reach of 5.4 nm makes lever arms that over-damp
+// every spin (unstable at the default step). A force along the centre line, as DPD's dissipative
+// force, leaves every rigid motion undamped and conserves linear and angular momentum; sliding
+// is still damped through the many pairs at oblique angles.
 #include "mdem/force_model.h"
 
 namespace mdem {

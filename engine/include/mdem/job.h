@@ -1,0 +1,72 @@
+#pragma once
+// A job: a scene and its protocol on a System, with the observables it reports (HOOMD's
+// "analyzers"), and one run loop that every front end (the CLI in-process, the daemon's workers)
+// shares: time series frames and snapshots at their cadences, progress, cancellation.
+#include <functional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <variant>
+#include <vector>
+
+#include "mdem/energy.h"
+#include "mdem/snapshot.h"
+#include "mdem/system.h"
+
+namespace mdem {
+
+// A job's key figures, in order: numbers or labels.
+using SummaryValue = std::variant<double, long, std::string>;
+using Summary = std::vector<std::pair<std::string, SummaryValue>>;
+
+class Job {
+ public:
+  virtual ~Job() = default;
+  virtual std::string_view kind() const = 0;
+  virtual System& system() = 0;
+  // Simulated time the protocol needs (ps).
+  virtual double duration() const = 0;
+  // Names of the time-series columns (units in the names), and one row at the current state.
+  virtual std::vector<std::string> columns() const = 0;
+  virtual std::vector<double> observe() = 0;
+  // The protocol's figures at the current state (call after the run).
+  virtual Summary summary() = 0;
+  // A few words on where the protocol is ("loading", "holding"), for progress lines.
+  virtual std::string phase() const { return {}; }
+};
+
+// Energy columns for the given stored terms, then kinetic (translational, rotational), external
+// work, dissipated, total and the balance residual; all in eV, names ending in "_eV".
+std::vector<std::string> energy_columns(const std::vector<EnergyTerm>& terms);
+std::vector<double> energy_values(const System& sys, const std::vector<EnergyTerm>& terms);
+
+struct JobCadence {
+  double frame_every_ps = 1.0;     // > 0
+  double snapshot_every_ps = 0.0;  // 0: no snapshots
+};
+
+struct JobProgress {
+  long step = 0, total_steps = 0;
+  double time_ps = 0;
+  std::string phase;
+};
+
+// What the run loop reports to; every callback may be empty.
+struct JobObserver {
+  std::function<void(const SeriesFrame&)> frame;
+  std::function<void(const Snapshot&)> snapshot;
+  std::function<void(const JobProgress&)> progress;  // about every 0.5 % of the run
+  std::function<bool()> cancelled;                   // polled between chunks of steps
+};
+
+struct JobRunResult {
+  long steps = 0;
+  bool cancelled = false;
+};
+
+// Initializes the system, then runs ceil(duration / dt) steps, reporting a frame at step 0, every
+// frame_every_ps and at the end, and snapshots likewise (none when snapshot_every_ps is 0).
+// Throws NumericalError or ConfigError from the system; what was reported before stays valid.
+JobRunResult run_job(Job& job, const JobCadence& cadence, const JobObserver& observer);
+
+}  // namespace mdem

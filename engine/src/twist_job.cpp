@@ -1,0 +1,116 @@
+#include "mdem/twist_job.h"
+
+#include <numbers>
+
+#include "mdem/anisotropic_vdw.h"
+#include "mdem/parallel_bond.h"
+#include "mdem/units.h"
+#include "mdem/viscous_contact_damping.h"
+
+namespace mdem {
+namespace {
+
+System build_system(const TwistJobSpec& spec, IntegratorSettings settings, Rope& rope) {
+  Elements el;
+  auto bonds = std::make_unique<ParallelBond>();
+  rope = build_hex_rope(el, bonds.get(), spec.rope);
+  System sys(std::move(el), settings);
+  sys.add(std::move(bonds));
+  sys.add(std::make_unique<AnisotropicVdw>());
+  if (spec.vdw_damping_ratio > 0) {
+    ContactDampingParams d;
+    d.ratio = spec.vdw_damping_ratio;
+    sys.add(std::make_unique<ViscousContactDamping>(d));
+  }
+  return sys;
+}
+
+}  // namespace
+
+TwistJob::TwistJob(const TwistJobSpec& spec, IntegratorSettings settings)
+    : sys_(build_system(spec, settings, rope_)) {
+  protocol_ = std::make_shared<TwistProtocol>(spec.loading, rope_.grip_a, rope_.grip_b);
+  shift_ = std::make_shared<ShiftAngle>(sys_.elements(), rope_);
+  auto protocol = protocol_;
+  sys_.add_updater([protocol](System& s, double t) { protocol->apply(s, t); });
+  // The shift angle is unwrapped from samples less than a half turn apart: sample every 10 steps.
+  auto shift = shift_;
+  const Rope* rope = &rope_;
+  double* angle = &shift_angle_;
+  sys_.add_updater([shift, rope, angle, calls = 0L](System& s, double) mutable {
+    if (calls++ % 10 == 0) *angle = shift->update(s.elements(), rope_axis(s.elements(), *rope));
+  });
+}
+
+std::vector<EnergyTerm> TwistJob::energy_terms() {
+  return {EnergyTerm::BondTension, EnergyTerm::BondShear, EnergyTerm::BondBending,
+          EnergyTerm::BondTorsion, EnergyTerm::Vdw};
+}
+
+std::string TwistJob::phase() const {
+  return std::string(twist_phase_name(protocol_->phase_at(sys_.time())));
+}
+
+TwistReport TwistJob::report() {
+  const Elements& el = sys_.elements();
+  const RopeAxis axis = rope_axis(el, rope_);
+  shift_angle_ = shift_->update(el, axis);
+  const RopeShape shape = rope_shape(el, rope_, axis);
+  TwistReport r;
+  r.applied_torque_nNnm = units::to_nNnm(protocol_->torque_at(sys_.time()));
+  r.grip_reaction_nNnm = units::to_nNnm(0.5 * (grip_reaction_moment(el, rope_.grip_a, axis.dir) -
+                                               grip_reaction_moment(el, rope_.grip_b, axis.dir)));
+  r.twist_angle_deg = shape.twist_angle_deg;
+  r.shift_angle_deg = shift_angle_ * 180.0 / std::numbers::pi;
+  r.rope_radius_nm = shape.radius;
+  r.length_nm = axis.length;
+  r.core_void_nm = shape.core_void_radius;
+  r.axis_deviation_nm = shape.axis_deviation;
+  r.clusters = shape.clusters;
+  r.topological_charge = rope_topological_charge(el, rope_, axis).charge;
+  r.morphology = classify_morphology(shape, rope_);
+  max_charge_ = std::max(max_charge_, r.topological_charge);
+  return r;
+}
+
+std::vector<std::string> TwistJob::columns() const {
+  std::vector<std::string> c = energy_columns(energy_terms());
+  for (const char* n : {"applied_torque_nNnm", "grip_reaction_nNnm", "twist_angle_deg",
+                        "shift_angle_deg", "rope_radius_nm", "length_nm", "core_void_nm",
+                        "axis_deviation_nm", "clusters", "topological_charge", "morphology_code"})
+    c.emplace_back(n);
+  return c;
+}
+
+std::vector<double> TwistJob::observe() {
+  std::vector<double> v = energy_values(sys_, energy_terms());
+  const TwistReport r = report();
+  v.insert(v.end(),
+           {r.applied_torque_nNnm, r.grip_reaction_nNnm, r.twist_angle_deg, r.shift_angle_deg,
+            r.rope_radius_nm, r.length_nm, r.core_void_nm, r.axis_deviation_nm,
+            static_cast<double>(r.clusters), static_cast<double>(r.topological_charge),
+            static_cast<double>(static_cast<int>(r.morphology))});
+  return v;
+}
+
+Summary TwistJob::summary() {
+  const TwistReport r = report();
+  return {{"morphology", std::string(morphology_name(r.morphology))},
+          {"twist_angle_deg", r.twist_angle_deg},
+          {"shift_angle_deg", r.shift_angle_deg},
+          {"topological_charge", static_cast<long>(r.topological_charge)},
+          {"max_topological_charge", static_cast<long>(max_charge_)},
+          {"rope_radius_nm", r.rope_radius_nm},
+          {"initial_rope_radius_nm", rope_.initial_radius},
+          {"length_nm", r.length_nm},
+          {"core_void_nm", r.core_void_nm},
+          {"axis_deviation_nm", r.axis_deviation_nm},
+          {"applied_torque_nNnm", r.applied_torque_nNnm},
+          {"grip_reaction_nNnm", r.grip_reaction_nNnm},
+          {"tubes", static_cast<long>(rope_.tubes.size())},
+          {"elements", static_cast<long>(sys_.elements().size())},
+          {"spacing_nm", rope_.lattice.spacing},
+          {"simulated_ps", sys_.time()}};
+}
+
+}  // namespace mdem
