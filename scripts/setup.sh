@@ -26,6 +26,7 @@ PACKAGES=(
   libyaml-cpp-dev        # job specs from YAML files
   clang-format           # code style (.clang-format)
   gnuplot-nox            # mdem plot
+  python3                # tests: the independent reader of mdem export's files
 )
 
 missing=()

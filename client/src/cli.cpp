@@ -22,6 +22,10 @@ void print_usage(std::ostream& os) {
         "Commands:\n"
         "  run <kind>   run a job in this process (e.g. `mdem run bundle`)\n"
         "  probe        evaluate one contact model for two elements and print JSON\n"
+        "  ls           list the jobs in the local results database\n"
+        "  show ID      show one job: state, spec, summary, frame and snapshot counts\n"
+        "  export ID    write a job's results as extended XYZ (OVITO), VTK (ParaView) or CSV\n"
+        "  plot ID      draw a job's time series to a .png or .svg with gnuplot\n"
         "  help [cmd]   show this help, or the help of one command\n"
         "\n"
         "Flags:\n"
@@ -40,6 +44,10 @@ int dispatch(const std::vector<std::string>& argv_tail, std::ostream& out, std::
   const std::vector<std::string> rest(argv_tail.begin() + 1, argv_tail.end());
   if (cmd == "probe") return probe(rest, out, err);
   if (cmd == "run") return run(rest, out, err);
+  if (cmd == "ls") return ls(rest, out, err);
+  if (cmd == "show") return show(rest, out, err);
+  if (cmd == "export") return export_job(rest, out, err);
+  if (cmd == "plot") return plot(rest, out, err);
   if (cmd == "--help" || cmd == "-h") {
     print_usage(out);
     return kOk;
@@ -51,6 +59,10 @@ int dispatch(const std::vector<std::string>& argv_tail, std::ostream& out, std::
     }
     if (rest.front() == "probe") return probe({"--help"}, out, err);
     if (rest.front() == "run") return run({"--help"}, out, err);
+    if (rest.front() == "ls") return ls({"--help"}, out, err);
+    if (rest.front() == "show") return show({"--help"}, out, err);
+    if (rest.front() == "export") return export_job({"--help"}, out, err);
+    if (rest.front() == "plot") return plot({"--help"}, out, err);
     err << "mdem help: unknown command '" << rest.front() << "'\n\n";
     print_usage(err);
     return kUsage;

@@ -26,4 +26,13 @@ int probe(const std::vector<std::string>& args, std::ostream& out, std::ostream&
 // `mdem run <kind> [flags]`: runs a job in-process (client/src/run.cpp).
 int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
+// Commands on the local results database (client/src/results_commands.cpp); `--db PATH` picks
+// the database. `mdem ls`: the jobs, newest first. `mdem show ID`: one job with its spec and
+// summary. `mdem export ID --format xyz|vtk|csv`: files for OVITO, ParaView or a spreadsheet.
+// `mdem plot ID`: the time series drawn to .png/.svg by gnuplot.
+int ls(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+int show(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+int export_job(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+int plot(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+
 }  // namespace mdem::cli

@@ -1,0 +1,45 @@
+#pragma once
+// Pictures of a job's time series, drawn by gnuplot run as a child process on a generated script
+// and data file in a temporary directory.
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "mdem/snapshot.h"
+
+namespace mdem::cli {
+
+// gnuplot missing or failing, or no picture written (exit code kJobFailed).
+struct PlotError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct PlotRequest {
+  std::string title;                  // e.g. "j-20261124-153012-3f9a (twist)"
+  std::vector<std::string> columns;   // every column of the job, in frame order
+  std::vector<std::string> selected;  // the columns to draw (see select_columns)
+  std::string x = "time_ps";          // horizontal axis: time_ps, step or a column
+  std::string out_path;               // .png or .svg
+};
+
+// The gnuplot terminal for a picture: "pngcairo" for .png, "svg" for .svg (any case); a
+// UsageError naming the allowed extensions otherwise.
+std::string plot_terminal(const std::string& out_path);
+
+// The columns to draw: the comma-separated `wanted`, or when it is empty every column ending in
+// "_eV" (the energy components). A UsageError names an unknown column and lists the available.
+std::vector<std::string> select_columns(const std::vector<std::string>& available,
+                                        const std::string& wanted);
+
+// Checks the horizontal axis: time_ps, step or one of `available`; UsageError otherwise.
+void check_x_column(const std::vector<std::string>& available, const std::string& x);
+
+// An axis label with units from the column names' suffixes: {"kinetic_eV", "total_eV"} ->
+// "energy (eV)"; "time_ps" -> "time (ps)"; a column without a known unit suffix -> its name.
+std::string axis_label(const std::vector<std::string>& columns);
+
+// Draws the selected columns against x with gnuplot ($MDEM_GNUPLOT, else `gnuplot` on PATH).
+// Throws PlotError (gnuplot missing: says to install gnuplot-nox).
+void render_plot(const PlotRequest& request, const std::vector<SeriesFrame>& frames);
+
+}  // namespace mdem::cli

@@ -1,0 +1,381 @@
+// The commands that read the local results database: `mdem ls`, `mdem show`, `mdem export` and
+// `mdem plot`.
+#include <algorithm>
+#include <filesystem>
+#include <memory>
+
+#include "export.h"
+#include "flags.h"
+#include "mdem/cli.h"
+#include "plot.h"
+#include "results_store.h"
+
+namespace mdem::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kDbFlagHelp =
+    "  --db PATH       the results database (default: $MDEM_DB, else\n"
+    "                  $XDG_DATA_HOME/mdem/results.db, else ~/.local/share/mdem/results.db)\n"
+    "  -h, --help      show this help\n";
+constexpr const char* kIdHelp =
+    "ID is a job id as `mdem ls` prints it, or any prefix of one that names a single job.\n";
+constexpr const char* kExitHelp =
+    "Exit codes: 0 success, 1 no such job or the database/output cannot be read or written,\n"
+    "2 usage error.\n";
+
+void print_ls_help(std::ostream& os) {
+  os << "Usage: mdem ls [--db PATH] [--json]\n"
+        "\n"
+        "Lists the jobs of the local results database, newest first: id, kind, state, creation\n"
+        "time (UTC) and highlights of the spec and summary (name, morphology, element count, why\n"
+        "a job failed).\n"
+        "\n"
+        "Flags:\n"
+        "  --json          print a JSON array of the jobs (spec and summary as JSON)\n"
+     << kDbFlagHelp << "\n"
+     << kExitHelp;
+}
+
+void print_show_help(std::ostream& os) {
+  os << "Usage: mdem show ID [--db PATH] [--json]\n"
+        "\n"
+        "Prints one job: kind, state (and why it failed), creation and finish times, the numbers\n"
+        "of frames (with the series' columns) and snapshots, and the spec and summary JSON.\n"
+     << kIdHelp
+     << "\n"
+        "Flags:\n"
+        "  --json          print one JSON object\n"
+     << kDbFlagHelp << "\n"
+     << kExitHelp;
+}
+
+void print_export_help(std::ostream& os) {
+  os << "Usage: mdem export ID --format xyz|vtk|csv [--out PATH] [--db PATH]\n"
+        "\n"
+        "Writes a job's results for other programs (numbers with 17 significant digits):\n"
+        "  xyz  extended XYZ for OVITO: one file, one frame per snapshot (Time in ps and Step in\n"
+        "       the header). Per element: species (C CNT segment, Si nanoparticle, G grain), pos\n"
+        "       (nm), orientation (unit quaternion body -> world in X Y Z W order, OVITO's),\n"
+        "       axis (body x in the world frame: a segment's axis, for oriented cylinders),\n"
+        "       radius (nm), tube, index and the per-element scalars (e.g. force_nN).\n"
+        "  vtk  VTK XML PolyData for ParaView: one <base>_<k>.vtp per snapshot and a <base>.pvd\n"
+        "       collection with their times (ps). Points at element centres with the same arrays\n"
+        "       (orientation in x y z w order), and one polyline per tube through its segments.\n"
+        "  csv  the time series: step,time_ps and the job's columns, one row per frame.\n"
+     << kIdHelp
+     << "\n"
+        "Flags:\n"
+        "  --format F      xyz, vtk or csv (required)\n"
+        "  --out PATH      the file to write; for vtk the .pvd file (the .vtp files go next to\n"
+        "                  it; missing directories are created). Default: <job id>.xyz,\n"
+        "                  <job id>.pvd or <job id>.csv in the current directory\n"
+     << kDbFlagHelp << "\n"
+     << kExitHelp;
+}
+
+void print_plot_help(std::ostream& os) {
+  os << "Usage: mdem plot ID [--out PATH] [--columns A,B,...] [--x COLUMN] [--db PATH]\n"
+        "\n"
+        "Draws a job's time series with gnuplot: by default the energy components (the columns\n"
+        "ending in _eV) against time_ps.\n"
+     << kIdHelp
+     << "\n"
+        "Flags:\n"
+        "  --out PATH      the picture: .png (pngcairo) or .svg (default: <job id>.png in the\n"
+        "                  current directory; missing directories are created)\n"
+        "  --columns LIST  comma-separated columns to draw (default: every *_eV column)\n"
+        "  --x COLUMN      the horizontal axis: time_ps (default), step, or a column (e.g. a\n"
+        "                  strain column, for a stress-strain curve)\n"
+     << kDbFlagHelp
+     << "\n"
+        "Needs gnuplot (Debian: apt-get install gnuplot-nox); $MDEM_GNUPLOT names another\n"
+        "gnuplot binary.\n"
+     << kExitHelp;
+}
+
+bool wants_help(const std::vector<std::string>& args) {
+  return std::any_of(args.begin(), args.end(),
+                     [](const std::string& a) { return a == "--help" || a == "-h"; });
+}
+
+// The job id matches nothing (exit kJobFailed).
+struct NoSuchJob : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Runs a command body, mapping errors to exit codes and messages prefixed with the command.
+template <class Body>
+int guarded(const std::string& cmd, std::ostream& err, Body&& body) {
+  try {
+    return body();
+  } catch (const UsageError& e) {
+    err << "mdem " << cmd << ": " << e.what() << "\nRun 'mdem " << cmd
+        << " --help' for the flags.\n";
+    return kUsage;
+  } catch (const NoSuchJob& e) {
+    err << "mdem " << cmd << ": " << e.what() << "\n";
+    return kJobFailed;
+  } catch (const std::exception& e) {
+    err << "mdem " << cmd << ": error: " << e.what() << "\n";
+    return kJobFailed;
+  }
+}
+
+bool takes_value(const FlagSpec& spec, const std::string& arg) {
+  return arg.find('=') == std::string::npos &&
+         std::find(spec.with_value.begin(), spec.with_value.end(), arg) != spec.with_value.end();
+}
+
+// Parses the flags and the job ID: the one argument that is neither a flag nor a flag's value.
+// Flag errors come first, so `--bogus 1` is reported as an unknown flag, not as a second ID.
+std::pair<std::string, std::map<std::string, std::string>> parse_id_and_flags(
+    const std::vector<std::string>& args, const FlagSpec& spec) {
+  std::vector<std::string> ids, rest;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a.size() > 1 && a.front() == '-') {
+      rest.push_back(a);
+      if (takes_value(spec, a) && i + 1 < args.size() && args[i + 1].rfind("--", 0) != 0)
+        rest.push_back(args[++i]);
+    } else {
+      ids.push_back(a);
+    }
+  }
+  auto given = parse_flags(rest, spec);
+  if (ids.empty()) throw UsageError("missing the job ID (see `mdem ls`)");
+  if (ids.size() > 1) throw UsageError("unexpected argument '" + ids[1] + "' (give one job ID)");
+  if (ids.front().empty()) throw UsageError("the job ID is empty");
+  return {ids.front(), std::move(given)};
+}
+
+std::string db_path(const std::map<std::string, std::string>& given) {
+  const auto it = given.find("--db");
+  return it != given.end() ? it->second : ResultsStore::default_path();
+}
+
+bool db_exists(const std::string& path) {
+  std::error_code ec;
+  return fs::exists(path, ec);
+}
+
+// Opens the database holding the job: a database that does not exist holds no job (and is not
+// created by a command that only reads).
+std::unique_ptr<ResultsStore> open_store(const std::string& path, const std::string& id) {
+  if (!db_exists(path))
+    throw NoSuchJob("no job '" + id + "' in " + path + " (the database does not exist)");
+  return std::make_unique<ResultsStore>(path);
+}
+
+JobRecord resolve(const ResultsStore& store, const std::string& id) {
+  std::optional<JobRecord> job = store.find(id);
+  if (!job) throw NoSuchJob("no job '" + id + "' in " + store.path());
+  return std::move(*job);
+}
+
+// Parsed JSON text; null when empty, the text itself when it is not JSON.
+json parse_or_text(const std::string& text) {
+  if (text.empty()) return nullptr;
+  json j = json::parse(text, nullptr, false);
+  return j.is_discarded() ? json(text) : j;
+}
+
+json job_json(const JobRecord& job) {
+  return json{{"id", job.id},
+              {"kind", job.kind},
+              {"state", job.state},
+              {"reason", job.reason},
+              {"created_at", job.created_at},
+              {"finished_at", job.finished_at},
+              {"spec", parse_or_text(job.spec_json)},
+              {"summary", parse_or_text(job.summary_json)}};
+}
+
+std::string scalar_text(const json& v) { return v.is_string() ? v.get<std::string>() : v.dump(); }
+
+// The few facts worth a glance in `mdem ls`.
+std::string highlights(const JobRecord& job) {
+  std::vector<std::string> parts;
+  const json spec = parse_or_text(job.spec_json);
+  if (spec.is_object() && spec.contains("name")) parts.push_back(scalar_text(spec["name"]));
+  json summary = parse_or_text(job.summary_json);
+  if (summary.is_object() && summary.contains("summary")) summary = summary["summary"];
+  if (summary.is_object()) {
+    if (summary.contains("morphology"))
+      parts.push_back("morphology " + scalar_text(summary["morphology"]));
+    if (summary.contains("elements"))
+      parts.push_back(scalar_text(summary["elements"]) + " elements");
+  }
+  if (!job.reason.empty()) parts.push_back(job.reason);
+  std::string text;
+  for (const std::string& p : parts) text += (text.empty() ? "" : "; ") + p;
+  constexpr std::size_t kMax = 72;
+  return text.size() > kMax ? text.substr(0, kMax - 3) + "..." : text;
+}
+
+void print_table(std::ostream& os, const std::vector<std::vector<std::string>>& rows) {
+  std::vector<std::size_t> width(rows.front().size(), 0);
+  for (const auto& row : rows)
+    for (std::size_t c = 0; c < row.size(); ++c) width[c] = std::max(width[c], row[c].size());
+  for (const auto& row : rows) {
+    std::string line;
+    for (std::size_t c = 0; c < row.size(); ++c)
+      line += c + 1 < row.size() ? row[c] + std::string(width[c] - row[c].size() + 2, ' ') : row[c];
+    while (!line.empty() && line.back() == ' ') line.pop_back();
+    os << line << '\n';
+  }
+}
+
+int run_ls(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  auto given = parse_flags(args, {{"--db"}, {"--json"}});
+  const std::string path = db_path(given);
+  std::vector<JobRecord> jobs;
+  if (db_exists(path)) jobs = ResultsStore(path).list();
+  if (given.count("--json")) {
+    json all = json::array();
+    for (const JobRecord& j : jobs) all.push_back(job_json(j));
+    out << all.dump(2) << '\n';
+    return kOk;
+  }
+  if (jobs.empty()) {
+    err << "no jobs in " << path << '\n';
+    return kOk;
+  }
+  std::vector<std::vector<std::string>> rows = {{"ID", "KIND", "STATE", "CREATED", "SUMMARY"}};
+  for (const JobRecord& j : jobs)
+    rows.push_back({j.id, j.kind, j.state, j.created_at, highlights(j)});
+  print_table(out, rows);
+  return kOk;
+}
+
+void print_document(std::ostream& os, const char* title, const std::string& text) {
+  os << title << ":\n";
+  const json j = parse_or_text(text);
+  if (j.is_null())
+    os << "  (none yet)";
+  else
+    write_json(os, j);
+  os << '\n';
+}
+
+void print_job(std::ostream& os, const JobRecord& job, const std::vector<std::string>& columns,
+               std::size_t frames, std::size_t snapshots) {
+  std::vector<std::vector<std::string>> rows = {
+      {"id:", job.id}, {"kind:", job.kind}, {"state:", job.state}};
+  if (!job.reason.empty()) rows.push_back({"reason:", job.reason});
+  rows.push_back({"created:", job.created_at});
+  rows.push_back({"finished:", job.finished_at.empty() ? "-" : job.finished_at});
+  std::string cols;
+  for (const std::string& c : columns) cols += (cols.empty() ? "" : ", ") + c;
+  rows.push_back({"frames:", std::to_string(frames) + (cols.empty() ? "" : " (" + cols + ")")});
+  rows.push_back({"snapshots:", std::to_string(snapshots)});
+  print_table(os, rows);
+  print_document(os, "spec", job.spec_json);
+  print_document(os, "summary", job.summary_json);
+}
+
+int run_show(const std::vector<std::string>& args, std::ostream& out) {
+  const FlagSpec spec{{"--db"}, {"--json"}};
+  auto [id, given] = parse_id_and_flags(args, spec);
+  const auto store = open_store(db_path(given), id);
+  const JobRecord job = resolve(*store, id);
+  const std::vector<std::string> columns = store->columns(job.id);
+  const std::size_t frames = store->frame_count(job.id), snaps = store->snapshot_count(job.id);
+  if (!given.count("--json")) {
+    print_job(out, job, columns, frames, snaps);
+    return kOk;
+  }
+  json j = job_json(job);
+  j["columns"] = columns;
+  j["frames"] = frames;
+  j["snapshots"] = snaps;
+  write_json(out, j);
+  out << '\n';
+  return kOk;
+}
+
+const char* export_extension(const std::string& format) {
+  if (format == "xyz") return ".xyz";
+  if (format == "vtk") return ".pvd";
+  if (format == "csv") return ".csv";
+  throw UsageError("--format: unknown format '" + format + "' (allowed: xyz, vtk, csv)");
+}
+
+int run_export(const std::vector<std::string>& args, std::ostream& out) {
+  const FlagSpec spec{{"--format", "--out", "--db"}, {}};
+  auto [id, given] = parse_id_and_flags(args, spec);
+  if (!given.count("--format")) throw UsageError("--format: missing (allowed: xyz, vtk, csv)");
+  const std::string format = given["--format"];
+  const char* ext = export_extension(format);
+  if (format == "vtk" && given.count("--out") && fs::path(given["--out"]).extension() != ".pvd")
+    throw UsageError("--out: '" + given["--out"] + "' must end in .pvd for --format vtk");
+  const auto store = open_store(db_path(given), id);
+  const JobRecord job = resolve(*store, id);
+  const std::string path = given.count("--out") ? given["--out"] : job.id + ext;
+  std::vector<std::string> files;
+  if (format == "xyz") files = export_xyz(*store, job, path);
+  if (format == "vtk") files = export_vtk(*store, job, path);
+  if (format == "csv") files = export_csv(*store, job, path);
+  out << "wrote " << files.front();
+  if (files.size() > 1) out << " and " << files.size() - 1 << " .vtp file(s) next to it";
+  out << '\n';
+  return kOk;
+}
+
+int run_plot(const std::vector<std::string>& args, std::ostream& out) {
+  const FlagSpec spec{{"--out", "--columns", "--x", "--db"}, {}};
+  auto [id, given] = parse_id_and_flags(args, spec);
+  if (given.count("--out")) plot_terminal(given["--out"]);  // a bad extension before any work
+  const auto store = open_store(db_path(given), id);
+  const JobRecord job = resolve(*store, id);
+  PlotRequest request;
+  request.title = job.id + " (" + job.kind + ")";
+  request.columns = store->columns(job.id);
+  request.selected =
+      select_columns(request.columns, given.count("--columns") ? given["--columns"] : "");
+  if (given.count("--x")) request.x = given["--x"];
+  check_x_column(request.columns, request.x);
+  request.out_path = given.count("--out") ? given["--out"] : job.id + ".png";
+  const std::vector<SeriesFrame> frames = store->frames(job.id);
+  render_plot(request, frames);
+  out << "wrote " << request.out_path << " (" << request.selected.size() << " column(s), "
+      << frames.size() << " frames)\n";
+  return kOk;
+}
+
+}  // namespace
+
+int ls(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  if (wants_help(args)) {
+    print_ls_help(out);
+    return kOk;
+  }
+  return guarded("ls", err, [&] { return run_ls(args, out, err); });
+}
+
+int show(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  if (wants_help(args)) {
+    print_show_help(out);
+    return kOk;
+  }
+  return guarded("show", err, [&] { return run_show(args, out); });
+}
+
+int export_job(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  if (wants_help(args)) {
+    print_export_help(out);
+    return kOk;
+  }
+  return guarded("export", err, [&] { return run_export(args, out); });
+}
+
+int plot(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  if (wants_help(args)) {
+    print_plot_help(out);
+    return kOk;
+  }
+  return guarded("plot", err, [&] { return run_plot(args, out); });
+}
+
+}  // namespace mdem::cli

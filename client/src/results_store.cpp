@@ -1,0 +1,684 @@
+// The local results database on the SQLite3 C API: WAL journal, a versioned schema, cached
+// prepared statements, one transaction per write, and every failure a StoreError that names the
+// file and SQLite's message. Arrays are stored as BLOBs of little-endian float64 / int32 values,
+// so doubles come back bit for bit.
+#include "results_store.h"
+
+#include <sqlite3.h>
+
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <filesystem>
+#include <map>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <set>
+
+namespace mdem::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kSchemaVersion = 1;
+constexpr int kBusyTimeoutMs = 10000;
+
+// time_ps columns have no declared type on purpose: a REAL column may store a whole-valued double
+// as an integer, which turns -0.0 into 0; without affinity the 8-byte IEEE value is kept as is.
+constexpr const char* kSchema = R"sql(
+CREATE TABLE schema_version (version INTEGER NOT NULL);
+CREATE TABLE jobs (
+  id TEXT PRIMARY KEY NOT NULL,
+  kind TEXT NOT NULL,
+  spec_json TEXT NOT NULL,
+  state TEXT NOT NULL CHECK (state IN ('QUEUED', 'RUNNING', 'SUCCEEDED', 'FAILED', 'CANCELLED')),
+  reason TEXT NOT NULL DEFAULT '',
+  summary_json TEXT NOT NULL DEFAULT '',
+  created_at TEXT NOT NULL,
+  finished_at TEXT NOT NULL DEFAULT '',
+  columns_json TEXT NOT NULL DEFAULT '[]'
+);
+CREATE TABLE frames (
+  job_id TEXT NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,
+  seq INTEGER NOT NULL,
+  step INTEGER NOT NULL,
+  time_ps NOT NULL,
+  vals BLOB NOT NULL,
+  PRIMARY KEY (job_id, seq)
+) WITHOUT ROWID;
+CREATE TABLE snapshots (
+  job_id TEXT NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,
+  seq INTEGER NOT NULL,
+  step INTEGER NOT NULL,
+  time_ps NOT NULL,
+  n INTEGER NOT NULL,
+  x BLOB NOT NULL,
+  q BLOB NOT NULL,
+  radius BLOB NOT NULL,
+  kind BLOB NOT NULL,
+  tube BLOB NOT NULL,
+  idx BLOB NOT NULL,
+  scalar_names TEXT NOT NULL,
+  scalars BLOB NOT NULL,
+  UNIQUE (job_id, seq)
+);
+)sql";
+// frames.vals: float64 per column. snapshots: x = float64 x,y,z per element; q = float64
+// w,x,y,z; radius float64; kind, tube, idx int32; scalar_names a JSON array; scalars float64,
+// n values per name in the order of the names.
+
+const std::set<std::string> kStates = {"QUEUED", "RUNNING", "SUCCEEDED", "FAILED", "CANCELLED"};
+
+constexpr const char* kJobColumns =
+    "id, kind, spec_json, state, reason, summary_json, created_at, finished_at";
+constexpr const char* kSnapshotColumns =
+    "step, time_ps, n, x, q, radius, kind, tube, idx, scalar_names, scalars";
+
+// ---- little-endian encoding -------------------------------------------------------------------
+
+void put_u(std::string& out, std::uint64_t u, int bytes) {
+  for (int b = 0; b < bytes; ++b) out.push_back(static_cast<char>((u >> (8 * b)) & 0xff));
+}
+
+std::uint64_t get_u(const std::string& in, std::size_t at, int bytes) {
+  std::uint64_t u = 0;
+  for (int b = 0; b < bytes; ++b)
+    u |= static_cast<std::uint64_t>(static_cast<unsigned char>(in[at + b])) << (8 * b);
+  return u;
+}
+
+void put_f64(std::string& out, double v) { put_u(out, std::bit_cast<std::uint64_t>(v), 8); }
+void put_i32(std::string& out, std::int32_t v) { put_u(out, std::bit_cast<std::uint32_t>(v), 4); }
+double get_f64(const std::string& in, std::size_t k) {
+  return std::bit_cast<double>(get_u(in, 8 * k, 8));
+}
+std::int32_t get_i32(const std::string& in, std::size_t k) {
+  return std::bit_cast<std::int32_t>(static_cast<std::uint32_t>(get_u(in, 4 * k, 4)));
+}
+
+std::string encode(const std::vector<double>& v) {
+  std::string out;
+  out.reserve(8 * v.size());
+  for (double d : v) put_f64(out, d);
+  return out;
+}
+
+std::string encode(const std::vector<std::int32_t>& v) {
+  std::string out;
+  out.reserve(4 * v.size());
+  for (std::int32_t i : v) put_i32(out, i);
+  return out;
+}
+
+// ---- time and ids -----------------------------------------------------------------------------
+
+std::string utc_now(const char* format) {
+  const std::time_t t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[64];
+  std::strftime(buf, sizeof buf, format, &tm);
+  return buf;
+}
+
+std::string env(const char* name) {
+  const char* v = std::getenv(name);
+  return v ? v : "";
+}
+
+// ---- the connection ---------------------------------------------------------------------------
+
+// The connection and its statement cache (ResultsStore::Impl is this, named outside the class
+// so that the helpers below can take it).
+struct StoreDb {
+  std::string path;
+  sqlite3* db = nullptr;
+  std::map<std::string, sqlite3_stmt*> statements;  // prepared once, reset after each use
+  std::mutex mu;                                    // one call at a time per store
+
+  explicit StoreDb(std::string p) : path(std::move(p)) {}
+  ~StoreDb() {
+    for (auto& [sql, s] : statements) sqlite3_finalize(s);
+    if (db) sqlite3_close_v2(db);
+  }
+
+  std::string where() const { return "results database '" + path + "'"; }
+  [[noreturn]] void fail(const std::string& what) const {
+    throw StoreError(where() + ": " + what + ": " + (db ? sqlite3_errmsg(db) : "out of memory"));
+  }
+  void exec(const char* sql, const std::string& what) {
+    if (sqlite3_exec(db, sql, nullptr, nullptr, nullptr) != SQLITE_OK) fail(what);
+  }
+  sqlite3_stmt* prepare(const std::string& sql) {
+    auto it = statements.find(sql);
+    if (it != statements.end()) return it->second;
+    sqlite3_stmt* s = nullptr;
+    if (sqlite3_prepare_v3(db, sql.c_str(), -1, SQLITE_PREPARE_PERSISTENT, &s, nullptr) !=
+        SQLITE_OK)
+      fail("cannot prepare '" + sql + "'");
+    statements.emplace(sql, s);
+    return s;
+  }
+};
+
+using Impl = StoreDb;
+
+// One use of a cached prepared statement: bind, step, read; reset on destruction.
+class Query {
+ public:
+  Query(Impl& db, const std::string& sql, std::string what)
+      : db_(db), s_(db.prepare(sql)), what_(std::move(what)) {}
+  ~Query() {
+    sqlite3_reset(s_);
+    sqlite3_clear_bindings(s_);
+  }
+  Query(const Query&) = delete;
+  Query& operator=(const Query&) = delete;
+
+  Query& bind(int i, const std::string& text) {
+    return check(
+        sqlite3_bind_text(s_, i, text.data(), static_cast<int>(text.size()), SQLITE_TRANSIENT));
+  }
+  Query& bind(int i, double v) { return check(sqlite3_bind_double(s_, i, v)); }
+  Query& bind(int i, long v) { return check(sqlite3_bind_int64(s_, i, v)); }
+  Query& bind_blob(int i, const std::string& bytes) {
+    return check(sqlite3_bind_blob64(s_, i, bytes.data(), bytes.size(), SQLITE_TRANSIENT));
+  }
+  // True while there is a row to read.
+  bool step() {
+    const int rc = sqlite3_step(s_);
+    if (rc == SQLITE_ROW) return true;
+    if (rc == SQLITE_DONE) return false;
+    db_.fail(what_);
+  }
+  void run() {
+    while (step()) {
+    }
+    sqlite3_reset(s_);
+  }
+  std::string text(int col) const {
+    const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(s_, col));
+    return p ? std::string(p, sqlite3_column_bytes(s_, col)) : std::string();
+  }
+  std::string blob(int col) const {
+    const auto* p = static_cast<const char*>(sqlite3_column_blob(s_, col));
+    return p ? std::string(p, sqlite3_column_bytes(s_, col)) : std::string();
+  }
+  double real(int col) const { return sqlite3_column_double(s_, col); }
+  long integer(int col) const { return static_cast<long>(sqlite3_column_int64(s_, col)); }
+
+ private:
+  Query& check(int rc) {
+    if (rc != SQLITE_OK) db_.fail(what_);
+    return *this;
+  }
+  Impl& db_;
+  sqlite3_stmt* s_;
+  std::string what_;
+};
+
+// BEGIN IMMEDIATE (takes the write lock up front, waiting up to the busy timeout); rolls back
+// unless committed.
+class Transaction {
+ public:
+  explicit Transaction(Impl& db) : db_(db) { db_.exec("BEGIN IMMEDIATE", "cannot begin a write"); }
+  ~Transaction() {
+    if (!done_) sqlite3_exec(db_.db, "ROLLBACK", nullptr, nullptr, nullptr);
+  }
+  Transaction(const Transaction&) = delete;
+  Transaction& operator=(const Transaction&) = delete;
+  void commit() {
+    db_.exec("COMMIT", "cannot commit");
+    done_ = true;
+  }
+
+ private:
+  Impl& db_;
+  bool done_ = false;
+};
+
+void create_parent_dirs(const Impl& db) {
+  const fs::path parent = fs::path(db.path).parent_path();
+  if (parent.empty()) return;
+  std::error_code ec;
+  fs::create_directories(parent, ec);
+  if (ec)
+    throw StoreError(db.where() + ": cannot create the directory '" + parent.string() +
+                     "': " + ec.message());
+}
+
+void open_connection(Impl& db) {
+  if (db.path.empty()) throw StoreError("results database: empty path");
+  create_parent_dirs(db);
+  const int rc =
+      sqlite3_open_v2(db.path.c_str(), &db.db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr);
+  if (rc != SQLITE_OK) db.fail("cannot open");
+  sqlite3_extended_result_codes(db.db, 1);
+  sqlite3_busy_timeout(db.db, kBusyTimeoutMs);
+  // The first statement reads the file header: a file that is not a database fails here.
+  db.exec("PRAGMA journal_mode=WAL", "cannot read (is it an SQLite database?)");
+  db.exec("PRAGMA synchronous=NORMAL", "cannot configure");
+  db.exec("PRAGMA foreign_keys=ON", "cannot configure");
+}
+
+bool has_table(Impl& db, const std::string& name) {
+  Query q(db, "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = ?", "cannot read");
+  q.bind(1, name);
+  return q.step();
+}
+
+long table_count(Impl& db) {
+  Query q(db, "SELECT COUNT(*) FROM sqlite_master WHERE type = 'table'", "cannot read");
+  q.step();
+  return q.integer(0);
+}
+
+void check_schema_version(Impl& db) {
+  Query q(db, "SELECT MAX(version) FROM schema_version", "cannot read the schema version");
+  const long v = q.step() ? q.integer(0) : 0;
+  if (v != kSchemaVersion)
+    throw StoreError(db.where() + ": schema version " + std::to_string(v) +
+                     ", but this mdem reads version " + std::to_string(kSchemaVersion) +
+                     (v > kSchemaVersion ? " (written by a newer mdem)" : ""));
+}
+
+// Checks the schema of an existing database (reading only, so a read-only file can be listed),
+// or creates it in a new one.
+void ensure_schema(Impl& db) {
+  if (has_table(db, "schema_version")) return check_schema_version(db);
+  Transaction t(db);
+  if (has_table(db, "schema_version")) return check_schema_version(db);  // created meanwhile
+  if (table_count(db) > 0)
+    throw StoreError(db.where() + ": not an mdem results database (it has other tables)");
+  db.exec(kSchema, "cannot create the schema");
+  Query(db, "INSERT INTO schema_version (version) VALUES (?)", "cannot create the schema")
+      .bind(1, static_cast<long>(kSchemaVersion))
+      .run();
+  t.commit();
+}
+
+// ---- validation -------------------------------------------------------------------------------
+
+void require_finite(const Impl& db, double v, const std::string& what) {
+  if (!std::isfinite(v))
+    throw StoreError(db.where() + ": refusing to write the non-finite value " + std::to_string(v) +
+                     " of " + what);
+}
+
+std::string at_step(long step) { return " at step " + std::to_string(step); }
+
+void check_frame(const Impl& db, const SeriesFrame& f, const std::vector<std::string>& columns,
+                 const std::string& id) {
+  if (f.values.size() != columns.size())
+    throw StoreError(db.where() + ": job '" + id + "': a frame" + at_step(f.step) + " has " +
+                     std::to_string(f.values.size()) + " values for " +
+                     std::to_string(columns.size()) + " columns (set_columns first)");
+  require_finite(db, f.time_ps, "time_ps" + at_step(f.step));
+  for (std::size_t k = 0; k < columns.size(); ++k)
+    require_finite(db, f.values[k], "column '" + columns[k] + "'" + at_step(f.step));
+}
+
+void check_size(const Impl& db, std::size_t got, std::size_t n, const std::string& field) {
+  if (got != n)
+    throw StoreError(db.where() + ": snapshot field '" + field + "' has " + std::to_string(got) +
+                     " entries for " + std::to_string(n) + " elements");
+}
+
+void check_snapshot_sizes(const Impl& db, const Snapshot& s) {
+  const std::size_t n = s.size();
+  check_size(db, s.q.size(), n, "q");
+  check_size(db, s.radius.size(), n, "radius");
+  check_size(db, s.kind.size(), n, "kind");
+  check_size(db, s.tube.size(), n, "tube");
+  check_size(db, s.index.size(), n, "index");
+  std::set<std::string> names;
+  for (const auto& [name, values] : s.scalars) {
+    check_size(db, values.size(), n, name);
+    if (name.empty() || !names.insert(name).second)
+      throw StoreError(db.where() + ": snapshot scalar names must be unique and non-empty ('" +
+                       name + "')");
+  }
+}
+
+void check_snapshot_values(const Impl& db, const Snapshot& s) {
+  const std::string at = at_step(s.step);
+  require_finite(db, s.time_ps, "snapshot time_ps" + at);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const std::string el = " of element " + std::to_string(i) + at;
+    for (int k = 0; k < 3; ++k) require_finite(db, s.x[i][k], "snapshot field 'x'" + el);
+    for (int k = 0; k < 4; ++k) require_finite(db, s.q[i].coeffs()[k], "snapshot field 'q'" + el);
+    require_finite(db, s.radius[i], "snapshot field 'radius'" + el);
+    for (const auto& [name, values] : s.scalars)
+      require_finite(db, values[i], "snapshot scalar '" + name + "'" + el);
+  }
+}
+
+// ---- rows <-> records -------------------------------------------------------------------------
+
+JobRecord read_job(const Query& q) {
+  return JobRecord{q.text(0), q.text(1), q.text(2), q.text(3),
+                   q.text(4), q.text(5), q.text(6), q.text(7)};
+}
+
+std::vector<std::string> read_columns(Impl& db, const std::string& id) {
+  Query q(db, "SELECT columns_json FROM jobs WHERE id = ?", "cannot read the columns");
+  q.bind(1, id);
+  if (!q.step()) return {};
+  const auto j = nlohmann::json::parse(q.text(0), nullptr, false);
+  if (!j.is_array()) throw StoreError(db.where() + ": job '" + id + "': corrupt column list");
+  return j.get<std::vector<std::string>>();
+}
+
+bool job_exists(Impl& db, const std::string& id) {
+  Query q(db, "SELECT 1 FROM jobs WHERE id = ?", "cannot read the jobs");
+  q.bind(1, id);
+  return q.step();
+}
+
+void require_job(Impl& db, const std::string& id) {
+  if (!job_exists(db, id)) throw StoreError(db.where() + ": no job '" + id + "'");
+}
+
+long next_seq(Impl& db, const char* table, const std::string& id) {
+  Query q(db, std::string("SELECT COALESCE(MAX(seq) + 1, 0) FROM ") + table + " WHERE job_id = ?",
+          "cannot read");
+  q.bind(1, id);
+  q.step();
+  return q.integer(0);
+}
+
+std::size_t count_rows(Impl& db, const char* table, const std::string& id) {
+  Query q(db, std::string("SELECT COUNT(*) FROM ") + table + " WHERE job_id = ?", "cannot read");
+  q.bind(1, id);
+  q.step();
+  return static_cast<std::size_t>(q.integer(0));
+}
+
+void check_blob(const Impl& db, const std::string& blob, std::size_t bytes, const char* field) {
+  if (blob.size() != bytes)
+    throw StoreError(db.where() + ": corrupt snapshot: field '" + field + "' has " +
+                     std::to_string(blob.size()) + " bytes, expected " + std::to_string(bytes));
+}
+
+void decode_geometry(const Impl& db, const Query& q, std::size_t n, Snapshot& s) {
+  const std::string x = q.blob(3), qq = q.blob(4), r = q.blob(5);
+  check_blob(db, x, 24 * n, "x");
+  check_blob(db, qq, 32 * n, "q");
+  check_blob(db, r, 8 * n, "radius");
+  s.x.resize(n);
+  s.q.resize(n);
+  s.radius.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    s.x[i] = Vec3(get_f64(x, 3 * i), get_f64(x, 3 * i + 1), get_f64(x, 3 * i + 2));
+    s.q[i] = Quat(get_f64(qq, 4 * i), get_f64(qq, 4 * i + 1), get_f64(qq, 4 * i + 2),
+                  get_f64(qq, 4 * i + 3));
+    s.radius[i] = get_f64(r, i);
+  }
+}
+
+std::vector<std::int32_t> decode_ints(const Impl& db, const std::string& blob, std::size_t n,
+                                      const char* field) {
+  check_blob(db, blob, 4 * n, field);
+  std::vector<std::int32_t> v(n);
+  for (std::size_t i = 0; i < n; ++i) v[i] = get_i32(blob, i);
+  return v;
+}
+
+void decode_scalars(const Impl& db, const Query& q, std::size_t n, Snapshot& s) {
+  const auto names = nlohmann::json::parse(q.text(9), nullptr, false);
+  if (!names.is_array()) throw StoreError(db.where() + ": corrupt snapshot: scalar names");
+  const std::string blob = q.blob(10);
+  check_blob(db, blob, 8 * n * names.size(), "scalars");
+  std::size_t k = 0;
+  for (const auto& name : names) {
+    std::vector<double> values(n);
+    for (std::size_t i = 0; i < n; ++i) values[i] = get_f64(blob, k++);
+    s.scalars.emplace_back(name.get<std::string>(), std::move(values));
+  }
+}
+
+Snapshot read_snapshot(const Impl& db, const Query& q) {
+  Snapshot s;
+  s.step = q.integer(0);
+  s.time_ps = q.real(1);
+  const std::size_t n = static_cast<std::size_t>(q.integer(2));
+  decode_geometry(db, q, n, s);
+  s.kind = decode_ints(db, q.blob(6), n, "kind");
+  s.tube = decode_ints(db, q.blob(7), n, "tube");
+  s.index = decode_ints(db, q.blob(8), n, "index");
+  decode_scalars(db, q, n, s);
+  return s;
+}
+
+void bind_snapshot(Query& q, const Snapshot& s) {
+  std::string x, qq, scalars;
+  x.reserve(24 * s.size());
+  qq.reserve(32 * s.size());
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    for (int k = 0; k < 3; ++k) put_f64(x, s.x[i][k]);
+    for (double c : {s.q[i].w(), s.q[i].x(), s.q[i].y(), s.q[i].z()}) put_f64(qq, c);
+  }
+  nlohmann::json names = nlohmann::json::array();
+  for (const auto& [name, values] : s.scalars) {
+    names.push_back(name);
+    scalars += encode(values);
+  }
+  q.bind(3, s.step).bind(4, s.time_ps).bind(5, static_cast<long>(s.size()));
+  q.bind_blob(6, x).bind_blob(7, qq).bind_blob(8, encode(s.radius));
+  q.bind_blob(9, encode(s.kind)).bind_blob(10, encode(s.tube)).bind_blob(11, encode(s.index));
+  q.bind(12, names.dump()).bind_blob(13, scalars);
+}
+
+}  // namespace
+
+struct ResultsStore::Impl : StoreDb {
+  using StoreDb::StoreDb;
+};
+
+// ---- public interface -------------------------------------------------------------------------
+
+ResultsStore::ResultsStore(const std::string& path) : impl_(std::make_unique<Impl>(path)) {
+  open_connection(*impl_);
+  ensure_schema(*impl_);
+}
+
+ResultsStore::~ResultsStore() = default;
+
+std::string ResultsStore::default_path() {
+  if (const std::string db = env("MDEM_DB"); !db.empty()) return db;
+  // XDG: an empty or relative $XDG_DATA_HOME is ignored.
+  if (const std::string xdg = env("XDG_DATA_HOME"); !xdg.empty() && xdg.front() == '/')
+    return (fs::path(xdg) / "mdem" / "results.db").string();
+  const std::string home = env("HOME");
+  if (home.empty())
+    throw StoreError(
+        "results database: neither $MDEM_DB, $XDG_DATA_HOME nor $HOME is set; give "
+        "the database with --db PATH");
+  return (fs::path(home) / ".local" / "share" / "mdem" / "results.db").string();
+}
+
+const std::string& ResultsStore::path() const { return impl_->path; }
+
+std::string ResultsStore::new_job_id() {
+  static std::mutex mu;
+  static std::random_device device;
+  static std::mt19937 gen(device());
+  std::lock_guard lock(mu);
+  char hex[8];
+  std::snprintf(hex, sizeof hex, "%04x", static_cast<unsigned>(gen() & 0xffffu));
+  return "j-" + utc_now("%Y%m%d-%H%M%S") + "-" + hex;
+}
+
+void ResultsStore::create_job(const JobRecord& job) {
+  std::lock_guard lock(impl_->mu);
+  if (job.id.empty()) throw StoreError(impl_->where() + ": a job needs an id");
+  if (!kStates.count(job.state))
+    throw StoreError(impl_->where() + ": job '" + job.id + "': unknown state '" + job.state +
+                     "' (allowed: QUEUED, RUNNING, SUCCEEDED, FAILED, CANCELLED)");
+  Query q(*impl_,
+          std::string("INSERT INTO jobs (") + kJobColumns + ") VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+          "cannot create job '" + job.id + "'");
+  q.bind(1, job.id).bind(2, job.kind).bind(3, job.spec_json).bind(4, job.state);
+  q.bind(5, job.reason).bind(6, job.summary_json);
+  q.bind(7, job.created_at.empty() ? utc_now("%Y-%m-%dT%H:%M:%SZ") : job.created_at);
+  q.bind(8, job.finished_at);
+  q.run();
+}
+
+void ResultsStore::finish_job(const std::string& id, const std::string& state,
+                              const std::string& reason, const std::string& summary_json) {
+  std::lock_guard lock(impl_->mu);
+  if (!kStates.count(state))
+    throw StoreError(impl_->where() + ": job '" + id + "': unknown state '" + state + "'");
+  Query q(*impl_,
+          "UPDATE jobs SET state = ?, reason = ?, summary_json = ?, finished_at = ? WHERE id = ?",
+          "cannot finish job '" + id + "'");
+  q.bind(1, state).bind(2, reason).bind(3, summary_json);
+  q.bind(4, utc_now("%Y-%m-%dT%H:%M:%SZ")).bind(5, id);
+  q.run();
+  if (sqlite3_changes(impl_->db) == 0) throw StoreError(impl_->where() + ": no job '" + id + "'");
+}
+
+void ResultsStore::set_columns(const std::string& id, const std::vector<std::string>& columns) {
+  std::lock_guard lock(impl_->mu);
+  Transaction t(*impl_);
+  require_job(*impl_, id);
+  if (count_rows(*impl_, "frames", id) > 0 && read_columns(*impl_, id) != columns)
+    throw StoreError(impl_->where() + ": job '" + id +
+                     "': the columns cannot change after frames were written");
+  Query(*impl_, "UPDATE jobs SET columns_json = ? WHERE id = ?", "cannot set the columns")
+      .bind(1, nlohmann::json(columns).dump())
+      .bind(2, id)
+      .run();
+  t.commit();
+}
+
+void ResultsStore::append_frames(const std::string& id, const std::vector<SeriesFrame>& frames) {
+  std::lock_guard lock(impl_->mu);
+  Transaction t(*impl_);
+  require_job(*impl_, id);
+  const std::vector<std::string> columns = read_columns(*impl_, id);
+  for (const SeriesFrame& f : frames) check_frame(*impl_, f, columns, id);
+  long seq = next_seq(*impl_, "frames", id);
+  for (const SeriesFrame& f : frames) {
+    Query q(*impl_, "INSERT INTO frames (job_id, seq, step, time_ps, vals) VALUES (?, ?, ?, ?, ?)",
+            "cannot write a frame of job '" + id + "'");
+    q.bind(1, id).bind(2, seq++).bind(3, f.step).bind(4, f.time_ps).bind_blob(5, encode(f.values));
+    q.run();
+  }
+  t.commit();
+}
+
+void ResultsStore::append_snapshot(const std::string& id, const Snapshot& snap) {
+  std::lock_guard lock(impl_->mu);
+  check_snapshot_sizes(*impl_, snap);
+  check_snapshot_values(*impl_, snap);
+  Transaction t(*impl_);
+  require_job(*impl_, id);
+  Query q(*impl_,
+          std::string("INSERT INTO snapshots (job_id, seq, ") + kSnapshotColumns +
+              ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+          "cannot write a snapshot of job '" + id + "'");
+  q.bind(1, id).bind(2, next_seq(*impl_, "snapshots", id));
+  bind_snapshot(q, snap);
+  q.run();
+  t.commit();
+}
+
+std::vector<JobRecord> ResultsStore::list() const {
+  std::lock_guard lock(impl_->mu);
+  Query q(*impl_,
+          std::string("SELECT ") + kJobColumns + " FROM jobs ORDER BY created_at DESC, rowid DESC",
+          "cannot list the jobs");
+  std::vector<JobRecord> jobs;
+  while (q.step()) jobs.push_back(read_job(q));
+  return jobs;
+}
+
+std::optional<JobRecord> ResultsStore::find(const std::string& id_or_prefix) const {
+  std::lock_guard lock(impl_->mu);
+  if (id_or_prefix.empty()) return std::nullopt;
+  {
+    Query q(*impl_, std::string("SELECT ") + kJobColumns + " FROM jobs WHERE id = ?",
+            "cannot read the jobs");
+    q.bind(1, id_or_prefix);
+    if (q.step()) return read_job(q);
+  }
+  constexpr long kShown = 20;
+  Query q(*impl_,
+          std::string("SELECT ") + kJobColumns +
+              " FROM jobs WHERE substr(id, 1, length(?1)) = ?1 ORDER BY id LIMIT ?2",
+          "cannot read the jobs");
+  q.bind(1, id_or_prefix).bind(2, kShown + 1);
+  std::vector<JobRecord> matches;
+  while (q.step()) matches.push_back(read_job(q));
+  if (matches.empty()) return std::nullopt;
+  if (matches.size() == 1) return matches.front();
+  std::string list;
+  for (std::size_t k = 0; k < matches.size() && k < kShown; ++k)
+    list += (k ? ", " : "") + matches[k].id;
+  if (matches.size() > kShown) list += ", ...";
+  throw StoreError("job id prefix '" + id_or_prefix + "' is ambiguous in '" + impl_->path +
+                   "': it matches " + list);
+}
+
+std::vector<std::string> ResultsStore::columns(const std::string& id) const {
+  std::lock_guard lock(impl_->mu);
+  return read_columns(*impl_, id);
+}
+
+std::vector<SeriesFrame> ResultsStore::frames(const std::string& id) const {
+  std::lock_guard lock(impl_->mu);
+  Query q(*impl_, "SELECT step, time_ps, vals FROM frames WHERE job_id = ? ORDER BY seq",
+          "cannot read the frames of job '" + id + "'");
+  q.bind(1, id);
+  std::vector<SeriesFrame> frames;
+  while (q.step()) {
+    const std::string vals = q.blob(2);
+    if (vals.size() % 8 != 0) throw StoreError(impl_->where() + ": corrupt frame values");
+    SeriesFrame f{q.integer(0), q.real(1), std::vector<double>(vals.size() / 8)};
+    for (std::size_t k = 0; k < f.values.size(); ++k) f.values[k] = get_f64(vals, k);
+    frames.push_back(std::move(f));
+  }
+  return frames;
+}
+
+std::size_t ResultsStore::frame_count(const std::string& id) const {
+  std::lock_guard lock(impl_->mu);
+  return count_rows(*impl_, "frames", id);
+}
+
+std::size_t ResultsStore::snapshot_count(const std::string& id) const {
+  std::lock_guard lock(impl_->mu);
+  return count_rows(*impl_, "snapshots", id);
+}
+
+std::vector<Snapshot> ResultsStore::snapshots(const std::string& id) const {
+  std::lock_guard lock(impl_->mu);
+  Query q(
+      *impl_,
+      std::string("SELECT ") + kSnapshotColumns + " FROM snapshots WHERE job_id = ? ORDER BY seq",
+      "cannot read the snapshots of job '" + id + "'");
+  q.bind(1, id);
+  std::vector<Snapshot> snaps;
+  while (q.step()) snaps.push_back(read_snapshot(*impl_, q));
+  return snaps;
+}
+
+std::optional<Snapshot> ResultsStore::snapshot(const std::string& id, std::size_t k) const {
+  std::lock_guard lock(impl_->mu);
+  Query q(*impl_,
+          std::string("SELECT ") + kSnapshotColumns +
+              " FROM snapshots WHERE job_id = ? ORDER BY seq LIMIT 1 OFFSET ?",
+          "cannot read a snapshot of job '" + id + "'");
+  q.bind(1, id).bind(2, static_cast<long>(k));
+  if (!q.step()) return std::nullopt;
+  return read_snapshot(*impl_, q);
+}
+
+}  // namespace mdem::cli

@@ -1,0 +1,78 @@
+#pragma once
+// The local results database (SQLite): every job run by `mdem` with its spec, state, summary,
+// time series and snapshots. One file per user by default; `--db PATH` picks another.
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "mdem/snapshot.h"
+
+namespace mdem::cli {
+
+// A database that cannot be opened, created, read or written; the message names the file and
+// what went wrong (exit code kJobFailed for commands, never a crash).
+struct StoreError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct JobRecord {
+  std::string id;            // e.g. "j-20261124-153012-3f9a" (unique, sortable by creation)
+  std::string kind;          // "twist", "bundle", ...
+  std::string spec_json;     // the full job spec, Protobuf JSON mapping, defaults filled in
+  std::string state;         // QUEUED | RUNNING | SUCCEEDED | FAILED | CANCELLED
+  std::string reason;        // why it failed (empty otherwise)
+  std::string summary_json;  // the final JSON document `--json` prints ("" until finished)
+  std::string created_at;    // ISO 8601 UTC
+  std::string finished_at;   // ISO 8601 UTC, "" while running
+};
+
+// Calls on one ResultsStore are serialised (safe from several threads); several processes may
+// share a file (WAL; a writer waits up to 10 s for another's transaction).
+class ResultsStore {
+ public:
+  // Opens (creating the file, its parent directories and the schema if needed) the database at
+  // `path`. WAL mode. Throws StoreError.
+  explicit ResultsStore(const std::string& path);
+  ~ResultsStore();
+  ResultsStore(const ResultsStore&) = delete;
+  ResultsStore& operator=(const ResultsStore&) = delete;
+
+  // $MDEM_DB if set, else $XDG_DATA_HOME/mdem/results.db, else $HOME/.local/share/mdem/results.db.
+  static std::string default_path();
+  const std::string& path() const;
+
+  // A new unique job id.
+  static std::string new_job_id();
+
+  void create_job(const JobRecord& job);  // state as given (normally RUNNING)
+  void finish_job(const std::string& id, const std::string& state, const std::string& reason,
+                  const std::string& summary_json);
+  // Column names of the job's series (set once, before the first frame).
+  void set_columns(const std::string& id, const std::vector<std::string>& columns);
+  // Appends frames / a snapshot (each call one transaction; values must be finite: a non-finite
+  // value throws StoreError naming the column, so nothing non-finite is ever written).
+  void append_frames(const std::string& id, const std::vector<SeriesFrame>& frames);
+  void append_snapshot(const std::string& id, const Snapshot& snap);
+
+  // All jobs, newest first.
+  std::vector<JobRecord> list() const;
+  // The job with this id, or the only job whose id starts with `id_or_prefix`; nullopt when
+  // none; StoreError when the prefix is ambiguous.
+  std::optional<JobRecord> find(const std::string& id_or_prefix) const;
+  std::vector<std::string> columns(const std::string& id) const;
+  std::vector<SeriesFrame> frames(const std::string& id) const;
+  std::size_t frame_count(const std::string& id) const;
+  std::size_t snapshot_count(const std::string& id) const;
+  std::vector<Snapshot> snapshots(const std::string& id) const;
+  // The k-th snapshot (0-based, in the order written), or nullopt past the end: lets a reader go
+  // through a long job one snapshot at a time instead of holding all of them in memory.
+  std::optional<Snapshot> snapshot(const std::string& id, std::size_t k) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace mdem::cli
