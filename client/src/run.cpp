@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "flags.h"
+#include "jobs.h"
 #include "mdem/bundle_scene.h"
 #include "mdem/cli.h"
 #include "mdem/units.h"
@@ -14,7 +15,8 @@ namespace mdem::cli {
 namespace {
 
 void print_run_help(std::ostream& os) {
-  os << "Usage: mdem run bundle [flags]\n"
+  os << "Usage: mdem run twist [flags]   (the twist job: `mdem run twist --help`)\n"
+        "       mdem run bundle [flags]\n"
         "\n"
         "Runs a bundle of parallel (10,10) CNTs (bonds + anisotropic vdW, no damping) from seeded\n"
         "random velocities and spins, and reports the energy balance: without damping or loads,\n"
@@ -168,8 +170,9 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   }
   const std::string kind = args.front();
   const std::vector<std::string> rest(args.begin() + 1, args.end());
+  if (kind == "twist") return run_twist(rest, out, err);
   if (kind != "bundle") {
-    err << "mdem run: unknown job kind '" << kind << "' (allowed: bundle)\n";
+    err << "mdem run: unknown job kind '" << kind << "' (allowed: twist, bundle)\n";
     return kUsage;
   }
   for (const std::string& a : rest)
