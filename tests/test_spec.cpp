@@ -87,6 +87,7 @@ TEST(SpecDefaults, EmptyTwistGetsEveryDocumentedDefault) {
   EXPECT_DOUBLE_EQ(t.torque_rate_nn_nm_per_ps(), 1.0);
   EXPECT_DOUBLE_EQ(t.hold_ps(), 100.0);
   EXPECT_EQ(t.boundary(), mdem::v1::CONSTANT_MOMENT);
+  EXPECT_EQ(t.grip_load(), mdem::v1::RIGID_GRIP);
   EXPECT_TRUE(t.has_unload());
   EXPECT_FALSE(t.unload());
   EXPECT_DOUBLE_EQ(t.unload_hold_ps(), 50.0);
@@ -212,6 +213,11 @@ const std::vector<FieldCase>& field_cases() {
        "twist.boundary",
        {"7", "-1"},
        "allowed: CONSTANT_MOMENT, TWIST_RELAXATION",
+       false},
+      {R"({"twist":{"grip_load":$}})",
+       "twist.grip_load",
+       {"3", "-2"},
+       "allowed: RIGID_GRIP, PER_ELEMENT",
        false},
       {R"({"twist":{"unload_hold_ps":$}})",
        "twist.unload_hold_ps",

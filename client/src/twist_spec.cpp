@@ -25,6 +25,7 @@ EngineJob twist_engine_job(const v1::JobSpec& spec) {
   l.hold = t.hold_ps();
   l.boundary = t.boundary() == v1::TWIST_RELAXATION ? TwistBoundary::TwistRelaxation
                                                     : TwistBoundary::ConstantMoment;
+  l.grip_load = t.grip_load() == v1::PER_ELEMENT ? GripLoad::PerElement : GripLoad::RigidGrip;
   l.unload = t.unload();
   l.unload_hold = t.unload_hold_ps();
   job.twist.vdw_damping_ratio = t.vdw_damping_ratio();
@@ -55,6 +56,7 @@ const std::map<std::string, std::string>& twist_flag_fields() {
       {"--rate", "twist.torque_rate_nn_nm_per_ps"},
       {"--hold", "twist.hold_ps"},
       {"--bc", "twist.boundary"},
+      {"--grip-load", "twist.grip_load"},
       {"--unload", "twist.unload"},
       {"--unload-hold", "twist.unload_hold_ps"},
       {"--grip-segments", "twist.grip_segments"},
@@ -135,6 +137,16 @@ void apply_twist_flags(const std::map<std::string, std::string>& f, v1::JobSpec&
     else
       throw UsageError("--bc: '" + bc +
                        "' is not allowed (allowed: constant-moment, twist-relaxation)");
+  }
+  if (has("--grip-load")) {
+    const std::string g = val("--grip-load");
+    if (g == "rigid-grip")
+      t.set_grip_load(v1::RIGID_GRIP);
+    else if (g == "per-element")
+      t.set_grip_load(v1::PER_ELEMENT);
+    else
+      throw UsageError("--grip-load: '" + g +
+                       "' is not allowed (allowed: rigid-grip, per-element)");
   }
   if (has("--unload")) t.set_unload(true);
   if (has("--unload-hold")) t.set_unload_hold_ps(number("--unload-hold", val("--unload-hold")));

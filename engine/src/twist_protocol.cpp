@@ -102,6 +102,13 @@ double TwistProtocol::torque_at(double t) const {
 
 void TwistProtocol::load_grip(Elements& el, const std::vector<std::size_t>& grip,
                               double torque) const {
+  if (loading_.grip_load == GripLoad::PerElement) {
+    for (std::size_t i : grip) {
+      el.f_ext[i].setZero();
+      el.t_ext[i] = torque * axis_;
+    }
+    return;
+  }
   const Vec3 c = mass_centroid(el, grip);
   double J = 0;
   for (std::size_t i : grip)

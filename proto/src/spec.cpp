@@ -43,6 +43,7 @@ void default_twist_loading(mdem::v1::TwistSpec& t) {
   if (!t.has_hold_ps()) t.set_hold_ps(d::kHoldPs);
   if (t.boundary() == mdem::v1::TWIST_BOUNDARY_UNSPECIFIED)
     t.set_boundary(mdem::v1::CONSTANT_MOMENT);
+  if (t.grip_load() == mdem::v1::GRIP_LOAD_UNSPECIFIED) t.set_grip_load(mdem::v1::RIGID_GRIP);
   if (!t.has_unload()) t.set_unload(d::kUnload);
   if (!t.has_unload_hold_ps()) t.set_unload_hold_ps(d::kUnloadHoldPs);
 }

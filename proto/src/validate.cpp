@@ -200,12 +200,20 @@ void check_boundary(const mdem::v1::TwistSpec& t, Report& rep) {
                                 "TWIST_RELAXATION; unset = CONSTANT_MOMENT)");
 }
 
+void check_grip_load(const mdem::v1::TwistSpec& t, Report& rep) {
+  if (mdem::v1::GripLoad_IsValid(t.grip_load())) return;
+  rep.add("twist.grip_load", std::to_string(t.grip_load()) +
+                                 " is not a grip load (allowed: RIGID_GRIP, PER_ELEMENT; unset = "
+                                 "RIGID_GRIP)");
+}
+
 void check_loading(const mdem::v1::TwistSpec& t, Report& rep) {
   rep.real("twist.torque_nn_nm", t.has_torque_nn_nm(), t.torque_nn_nm(), r::kTorqueNnNm);
   rep.real("twist.torque_rate_nn_nm_per_ps", t.has_torque_rate_nn_nm_per_ps(),
            t.torque_rate_nn_nm_per_ps(), r::kTorqueRate);
   rep.real("twist.hold_ps", t.has_hold_ps(), t.hold_ps(), r::kHoldPs);
   check_boundary(t, rep);
+  check_grip_load(t, rep);
   rep.real("twist.unload_hold_ps", t.has_unload_hold_ps(), t.unload_hold_ps(), r::kUnloadHoldPs);
 }
 

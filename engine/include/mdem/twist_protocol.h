@@ -31,6 +31,17 @@ class System;
 struct Elements;
 
 enum class TwistBoundary { ConstantMoment, TwistRelaxation };
+
+// How a grip carries the torque.
+enum class GripLoad {
+  // The grip's moment about the rope axis is T (forces and torques as described above): a rope
+  // twisted as a whole by a clamp that lets each tube end spin.
+  RigidGrip,
+  // Every grip element carries the moment T about the axis through its own centre, no force: the
+  // thesis's PFC reading (an applied moment on each grip ball). Each tube end is twisted by T, the
+  // grip as a whole by n·T, and the rope turns only as far as the twisted tubes make it.
+  PerElement,
+};
 enum class TwistPhase { Loading, Holding, Unloading, Relaxing, Done };
 std::string_view twist_phase_name(TwistPhase p);
 
@@ -41,6 +52,7 @@ struct TwistLoading {
   TwistBoundary boundary = TwistBoundary::ConstantMoment;
   bool unload = false;
   double unload_hold = 0;  // ps at zero load after unloading
+  GripLoad grip_load = GripLoad::RigidGrip;
 };
 
 class TwistProtocol {

@@ -1,0 +1,199 @@
+// `mdem run twist`: a small job end to end (JSON report, results in the database), and every
+// input path refusing wrong, missing, huge and non-finite values with exit code 2 and a message
+// naming the field and the flag.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "../client/src/results_store.h"
+#include "mdem/cli.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int code;
+  std::string out, err;
+};
+
+Result run(std::vector<std::string> args) {
+  args.insert(args.begin(), "twist");
+  std::ostringstream out, err;
+  const int code = mdem::cli::run(args, out, err);
+  return {code, out.str(), err.str()};
+}
+
+fs::path temp_dir() {
+  const fs::path d = fs::temp_directory_path() / ("mdem-cli-twist-" + std::to_string(getpid()));
+  fs::create_directories(d);
+  return d;
+}
+
+const std::vector<std::string> kSmall = {"--layers",  "2", "--length",         "8",
+                                         "--torque",  "1", "--hold",           "1",
+                                         "--threads", "1", "--snapshot-every", "1"};
+
+// base plus more; a flag in `more` replaces the same flag (and its value) in base.
+std::vector<std::string> with(std::vector<std::string> base, std::vector<std::string> more) {
+  for (std::size_t k = 0; k < more.size(); ++k) {
+    if (more[k].rfind("--", 0) != 0) continue;
+    auto it = std::find(base.begin(), base.end(), more[k]);
+    if (it != base.end()) base.erase(it, it + 2);
+  }
+  base.insert(base.end(), more.begin(), more.end());
+  return base;
+}
+
+TEST(CliTwist, SmallJobReportsJsonAndStoresItsResults) {
+  const std::string db = (temp_dir() / "ok.db").string();
+  const Result r = run(with(kSmall, {"--db", db, "--json", "--name", "smoke"}));
+  ASSERT_EQ(r.code, mdem::cli::kOk) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["state"], "SUCCEEDED");
+  for (const char* k : {"twist_angle_deg", "topological_charge", "rope_radius_nm", "morphology",
+                        "shift_angle_deg", "length_nm"})
+    EXPECT_TRUE(j["summary"].contains(k)) << k;
+  EXPECT_EQ(j["summary"]["tubes"], 7);
+  EXPECT_EQ(j["summary"]["elements"], 7 * 6);  // 8 nm = 6 segments
+  EXPECT_LT(j["accuracy"]["energy_balance_error"].get<double>(), 0.05);
+  EXPECT_NEAR(j["accuracy"]["dt_over_critical"].get<double>(), 0.6, 1e-12);
+  EXPECT_GT(j["performance"]["steps"].get<long>(), 50);
+  EXPECT_GT(j["performance"]["element_steps_per_s"].get<double>(), 0);
+  EXPECT_GT(j["performance"]["wall_s"].get<double>(), 0);
+
+  mdem::cli::ResultsStore store(db);
+  const auto rec = store.find(j["job_id"].get<std::string>());
+  ASSERT_TRUE(rec.has_value());
+  EXPECT_EQ(rec->state, "SUCCEEDED");
+  EXPECT_EQ(rec->kind, "twist");
+  const auto spec = nlohmann::json::parse(rec->spec_json);
+  EXPECT_EQ(spec["name"], "smoke");
+  EXPECT_EQ(spec["twist"]["layers"], 2);
+  EXPECT_DOUBLE_EQ(spec["twist"]["torque_nn_nm"].get<double>(), 1.0);
+  // Ramp 1 ps + hold 1 ps at 1 ps frames: frames at 0, ~1, ~2 ps and at the last step;
+  // snapshots at the same steps.
+  const auto frames = store.frames(rec->id);
+  ASSERT_GE(frames.size(), 3u);
+  ASSERT_LE(frames.size(), 4u);
+  EXPECT_EQ(frames.front().step, 0);
+  EXPECT_NEAR(frames.back().time_ps, 2.0, 0.05);
+  EXPECT_EQ(store.snapshot_count(rec->id), frames.size());
+  const auto cols = store.columns(rec->id);
+  EXPECT_NE(std::find(cols.begin(), cols.end(), "topological_charge"), cols.end());
+  EXPECT_NE(std::find(cols.begin(), cols.end(), "bond_torsion_eV"), cols.end());
+}
+
+TEST(CliTwist, SpecFileAndFlagsCombineWithFlagsWinning) {
+  const fs::path d = temp_dir();
+  std::ofstream(d / "spec.yaml") << "name: from-yaml\ntwist:\n  layers: 2\n  length_nm: 8\n"
+                                    "  torque_nn_nm: 50\n  hold_ps: 1\n"
+                                    "  boundary: TWIST_RELAXATION\noutputs:\n"
+                                    "  snapshot_every_ps: 0\n";
+  const Result r = run({"--spec", (d / "spec.yaml").string(), "--torque", "1", "--threads", "1",
+                        "--db", (d / "y.db").string(), "--json"});
+  ASSERT_EQ(r.code, mdem::cli::kOk) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  mdem::cli::ResultsStore store((d / "y.db").string());
+  const auto rec = store.find(j["job_id"].get<std::string>());
+  const auto spec = nlohmann::json::parse(rec->spec_json);
+  EXPECT_EQ(spec["name"], "from-yaml");
+  EXPECT_EQ(spec["twist"]["boundary"], "TWIST_RELAXATION");
+  EXPECT_DOUBLE_EQ(spec["twist"]["torque_nn_nm"].get<double>(), 1.0);
+  EXPECT_EQ(store.snapshot_count(rec->id), 0u);
+}
+
+// Every value flag: text, non-finite, and out-of-range values each name the flag (and, for range
+// errors, the spec field and its allowed range); nothing runs and no job is stored.
+TEST(CliTwist, BadValuesAreRefusedNamingFieldAndRange) {
+  const std::string db = (temp_dir() / "bad.db").string();
+  struct Case {
+    std::string flag, value, expect;
+  };
+  const std::vector<Case> cases = {
+      {"--layers", "1", "twist.layers"},
+      {"--layers", "11", "twist.layers"},
+      {"--layers", "x", "--layers"},
+      {"--layers", "1e9", "--layers"},
+      {"--length", "4", "twist.length_nm"},
+      {"--length", "1e300", "twist.length_nm"},
+      {"--length", "nan", "--length"},
+      {"--length", "inf", "--length"},
+      {"--spacing", "1.2", "twist.spacing_nm"},
+      {"--spacing", "-inf", "--spacing"},
+      {"--missing", "7", "twist.missing_tubes"},
+      {"--missing", "1,1", "twist.missing_tubes"},
+      {"--missing", "a", "--missing"},
+      {"--torque", "0", "twist.torque_nn_nm"},
+      {"--torque", "501", "twist.torque_nn_nm"},
+      {"--torque", "NaN", "--torque"},
+      {"--rate", "-1", "twist.torque_rate"},
+      {"--rate", "1e6", "twist.torque_rate"},
+      {"--hold", "-1", "twist.hold_ps"},
+      {"--hold", "1e7", "twist.hold_ps"},
+      {"--unload-hold", "-5", "twist.unload_hold_ps"},
+      {"--grip-segments", "0", "twist.grip_segments"},
+      {"--grip-segments", "99", "twist.grip_segments"},
+      {"--damping-ratio", "2", "twist.vdw_damping_ratio"},
+      {"--local-damping", "1", "twist.local_damping"},
+      {"--dt", "0", "run.dt_ps"},
+      {"--dt", "5", "run.dt_ps"},
+      {"--safety", "0", "run.safety"},
+      {"--threads", "-1", "run.threads"},
+      {"--energy-every", "0", "outputs.energy_every_ps"},
+      {"--snapshot-every", "-1", "outputs.snapshot_every_ps"},
+      {"--bc", "fixed", "--bc"},
+      {"--grip-load", "both", "--grip-load"},
+      {"--line-defects", "0:9", "twist.line_defects[0].width"},
+      {"--line-defects", "1:2:3:4", "--line-defects"},
+      {"--line-defects", "400", "twist.line_defects[0].angle_deg"},
+  };
+  for (const Case& c : cases) {
+    const Result r = run(with(kSmall, {"--db", db, c.flag, c.value}));
+    EXPECT_EQ(r.code, mdem::cli::kUsage) << c.flag << " " << c.value << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.flag << " " << c.value << "\n" << r.err;
+    if (c.expect.rfind("--", 0) != 0) {  // a range error names the flag too, and the range
+      EXPECT_NE(r.err.find("(" + c.flag + ")"), std::string::npos) << r.err;
+      EXPECT_NE(r.err.find("allowed"), std::string::npos) << r.err;
+    }
+  }
+  EXPECT_FALSE(fs::exists(db));  // nothing was queued or stored
+}
+
+TEST(CliTwist, MissingValuesUnknownFlagsAndBadSpecFiles) {
+  const fs::path d = temp_dir();
+  EXPECT_EQ(run({"--torque"}).code, mdem::cli::kUsage);
+  EXPECT_EQ(run({"--frobnicate", "1"}).code, mdem::cli::kUsage);
+  EXPECT_EQ(run({"extra"}).code, mdem::cli::kUsage);
+  Result r = run({"--spec", (d / "nope.json").string()});
+  EXPECT_EQ(r.code, mdem::cli::kUsage);
+  EXPECT_NE(r.err.find("nope.json"), std::string::npos) << r.err;
+  std::ofstream(d / "bad.json") << R"({"twist": {"layers": 3, "torque_nn_nm": "NaN"}})";
+  r = run({"--spec", (d / "bad.json").string()});
+  EXPECT_EQ(r.code, mdem::cli::kUsage);
+  EXPECT_NE(r.err.find("twist.torque_nn_nm"), std::string::npos) << r.err;
+  std::ofstream(d / "unknown.json") << R"({"twist": {"layers": 3, "twirl": 1}})";
+  r = run({"--spec", (d / "unknown.json").string()});
+  EXPECT_EQ(r.code, mdem::cli::kUsage);
+  EXPECT_NE(r.err.find("twirl"), std::string::npos) << r.err;
+  std::ofstream(d / "broken.yaml") << "twist: [layers: 3\n";
+  r = run({"--spec", (d / "broken.yaml").string()});
+  EXPECT_EQ(r.code, mdem::cli::kUsage);
+  EXPECT_NE(r.err.find("line"), std::string::npos) << r.err;
+}
+
+TEST(CliTwist, UnwritableDatabaseFailsTheJobWithItsPath) {
+  const fs::path d = temp_dir();
+  std::ofstream(d / "file") << "x";
+  const std::string db = (d / "file" / "sub" / "r.db").string();
+  const Result r = run(with(kSmall, {"--db", db}));
+  EXPECT_EQ(r.code, mdem::cli::kJobFailed);
+  EXPECT_NE(r.err.find("file"), std::string::npos) << r.err;
+}
+
+}  // namespace
