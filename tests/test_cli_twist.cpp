@@ -12,6 +12,7 @@
 
 #include "../client/src/results_store.h"
 #include "mdem/cli.h"
+#include "mdem/spec.h"
 
 namespace {
 
@@ -197,3 +198,11 @@ TEST(CliTwist, UnwritableDatabaseFailsTheJobWithItsPath) {
 }
 
 }  // namespace
+
+// The example specs shipped in examples/ stay valid (loaded and validated, not run).
+TEST(CliTwist, ShippedExampleSpecsAreValid) {
+  for (const char* f : {"twist_table4-1.yaml", "twist_defects.json"}) {
+    const fs::path p = fs::path(MDEM_SOURCE_DIR) / "examples" / f;
+    EXPECT_NO_THROW(mdem::spec::finalize(mdem::spec::load_file(p.string()))) << f;
+  }
+}

@@ -1,5 +1,6 @@
 #pragma once
 // The job kinds `mdem run` knows, each in its own file.
+#include <functional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -7,5 +8,10 @@
 namespace mdem::cli {
 
 int run_twist(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+
+// Runs one `mdem run <kind>` body and turns what it throws into an exit code and a message
+// prefixed with `command`: a bad flag (UsageError) or an impossible setting (ConfigError,
+// std::invalid_argument) is a usage error, anything else a failed job.
+int guarded_run(const std::string& command, const std::function<int()>& body, std::ostream& err);
 
 }  // namespace mdem::cli

@@ -163,6 +163,24 @@ int run_bundle(const RunOptions& o, std::ostream& out, std::ostream& err) {
 
 }  // namespace
 
+int guarded_run(const std::string& command, const std::function<int()>& body, std::ostream& err) {
+  try {
+    return body();
+  } catch (const UsageError& e) {
+    err << command << ": " << e.what() << "\nRun '" << command << " --help' for the flags.\n";
+    return kUsage;
+  } catch (const ConfigError& e) {
+    err << command << ": " << e.what() << "\n";
+    return kUsage;
+  } catch (const std::invalid_argument& e) {
+    err << command << ": " << e.what() << "\n";
+    return kUsage;
+  } catch (const std::exception& e) {
+    err << command << ": error: " << e.what() << "\n";
+    return kJobFailed;
+  }
+}
+
 int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   if (args.empty() || args.front() == "--help" || args.front() == "-h") {
     print_run_help(args.empty() ? err : out);
@@ -180,18 +198,8 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
       print_run_help(out);
       return kOk;
     }
-  try {
-    return run_bundle(parse_run_options(rest), out, err);
-  } catch (const UsageError& e) {
-    err << "mdem run bundle: " << e.what() << "\nRun 'mdem run --help' for the flags.\n";
-    return kUsage;
-  } catch (const ConfigError& e) {
-    err << "mdem run bundle: " << e.what() << "\n";
-    return kUsage;
-  } catch (const std::exception& e) {
-    err << "mdem run bundle: error: " << e.what() << "\n";
-    return kJobFailed;
-  }
+  return guarded_run(
+      "mdem run bundle", [&] { return run_bundle(parse_run_options(rest), out, err); }, err);
 }
 
 }  // namespace mdem::cli

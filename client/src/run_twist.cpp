@@ -280,18 +280,8 @@ int run_twist(const std::vector<std::string>& args, std::ostream& out, std::ostr
     err << "mdem run twist: " << e.what() << "\nRun 'mdem run twist --help' for the flags.\n";
     return kUsage;
   }
-  try {
-    return execute(p, out, err);
-  } catch (const ConfigError& e) {
-    err << "mdem run twist: " << e.what() << "\n";
-    return kUsage;
-  } catch (const std::invalid_argument& e) {
-    err << "mdem run twist: " << e.what() << "\n";
-    return kUsage;
-  } catch (const std::exception& e) {
-    err << "mdem run twist: error: " << e.what() << "\n";
-    return kJobFailed;
-  }
+  return guarded_run(
+      "mdem run twist", [&] { return execute(p, out, err); }, err);
 }
 
 }  // namespace mdem::cli

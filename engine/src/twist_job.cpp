@@ -70,6 +70,8 @@ TwistReport TwistJob::report() {
   r.topological_charge = rope_topological_charge(el, rope_, axis).charge;
   r.morphology = classify_morphology(shape, rope_);
   max_charge_ = std::max(max_charge_, r.topological_charge);
+  peak_twist_ = std::max(peak_twist_, r.twist_angle_deg);
+  peak_shift_ = std::max(peak_shift_, std::abs(r.shift_angle_deg));
   return r;
 }
 
@@ -100,6 +102,8 @@ Summary TwistJob::summary() {
           {"shift_angle_deg", r.shift_angle_deg},
           {"topological_charge", static_cast<long>(r.topological_charge)},
           {"max_topological_charge", static_cast<long>(max_charge_)},
+          {"peak_twist_angle_deg", peak_twist_},
+          {"peak_shift_angle_deg", peak_shift_},
           {"rope_radius_nm", r.rope_radius_nm},
           {"initial_rope_radius_nm", rope_.initial_radius},
           {"length_nm", r.length_nm},

@@ -61,7 +61,10 @@ class TwistJob final : public Job {
   std::shared_ptr<TwistProtocol> protocol_;
   std::shared_ptr<ShiftAngle> shift_;
   double shift_angle_ = 0;  // radians, kept continuous by an updater
+  // Largest values seen at any report (the summary's figures are those at the end: after
+  // unloading, the end shift is the residual twist and these are the loaded ones).
   int max_charge_ = 0;
+  double peak_twist_ = 0, peak_shift_ = 0;
 };
 
 }  // namespace mdem
