@@ -94,6 +94,7 @@ TEST(SpecDefaults, EmptyTwistGetsEveryDocumentedDefault) {
   EXPECT_EQ(t.grip_segments(), 1);
   EXPECT_DOUBLE_EQ(t.vdw_damping_ratio(), 0.03);
   EXPECT_DOUBLE_EQ(t.local_damping(), 0.1);
+  EXPECT_DOUBLE_EQ(t.temperature_k(), 0.0);
   EXPECT_EQ(mdem::spec::twist_segments(t), 50);
   EXPECT_EQ(mdem::spec::hex_tube_count(t.layers()), 91);
 }
@@ -214,6 +215,10 @@ const std::vector<FieldCase>& field_cases() {
        {"7", "-1"},
        "allowed: CONSTANT_MOMENT, TWIST_RELAXATION",
        false},
+      {R"({"twist":{"temperature_k":$}})",
+       "twist.temperature_k",
+       {"-1", "2001", "1e300"},
+       ">= 0 and <= 2000 K"},
       {R"({"twist":{"grip_load":$}})",
        "twist.grip_load",
        {"3", "-2"},

@@ -52,3 +52,9 @@ TEST(Units, ConstantForceAccelerationInSi) {
   // All of the external work is kinetic energy.
   EXPECT_NEAR(sys.energy().external_work, sys.energy().kinetic(), 1e-9 * sys.energy().kinetic());
 }
+
+// kB T at room temperature: 25.85 meV at 300 K (8.617333e-5 eV/K).
+TEST(Units, BoltzmannConstant) {
+  EXPECT_NEAR(mdem::units::kBoltzmann, 8.617333262e-5, 1e-13);
+  EXPECT_NEAR(mdem::units::kBoltzmann * 300.0, 0.0258520, 1e-6);
+}

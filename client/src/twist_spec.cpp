@@ -29,6 +29,8 @@ EngineJob twist_engine_job(const v1::JobSpec& spec) {
   l.unload = t.unload();
   l.unload_hold = t.unload_hold_ps();
   job.twist.vdw_damping_ratio = t.vdw_damping_ratio();
+  job.twist.temperature_k = t.temperature_k();
+  job.twist.seed = static_cast<unsigned>(spec.seed());
   job.settings.local_damping = t.local_damping();
   if (spec.run().has_dt_ps()) job.settings.dt = spec.run().dt_ps();
   job.settings.safety = spec.run().safety();
@@ -62,6 +64,7 @@ const std::map<std::string, std::string>& twist_flag_fields() {
       {"--grip-segments", "twist.grip_segments"},
       {"--damping-ratio", "twist.vdw_damping_ratio"},
       {"--local-damping", "twist.local_damping"},
+      {"--temperature", "twist.temperature_k"},
   };
   return m;
 }
@@ -154,6 +157,7 @@ void apply_twist_flags(const std::map<std::string, std::string>& f, v1::JobSpec&
     t.set_grip_segments(static_cast<int>(whole("--grip-segments", val("--grip-segments"))));
   if (has("--damping-ratio"))
     t.set_vdw_damping_ratio(number("--damping-ratio", val("--damping-ratio")));
+  if (has("--temperature")) t.set_temperature_k(number("--temperature", val("--temperature")));
   if (has("--local-damping"))
     t.set_local_damping(number("--local-damping", val("--local-damping")));
 }

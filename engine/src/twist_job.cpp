@@ -1,8 +1,11 @@
 #include "mdem/twist_job.h"
 
+#include <cmath>
 #include <numbers>
 
 #include "mdem/anisotropic_vdw.h"
+#include "mdem/bundle_scene.h"
+#include "mdem/cnt.h"
 #include "mdem/parallel_bond.h"
 #include "mdem/units.h"
 #include "mdem/viscous_contact_damping.h"
@@ -14,6 +17,11 @@ System build_system(const TwistJobSpec& spec, IntegratorSettings settings, Rope&
   Elements el;
   auto bonds = std::make_unique<ParallelBond>();
   rope = build_hex_rope(el, bonds.get(), spec.rope);
+  if (spec.temperature_k > 0) {
+    // Equipartition: ½ m <v_k²> = ½ kB T per component, likewise for the spins.
+    const double kT = units::kBoltzmann * spec.temperature_k;
+    randomize_motion(el, std::sqrt(kT / cnt::kMass), std::sqrt(kT / cnt::kInertia), spec.seed);
+  }
   System sys(std::move(el), settings);
   sys.add(std::move(bonds));
   sys.add(std::make_unique<AnisotropicVdw>());

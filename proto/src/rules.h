@@ -54,6 +54,7 @@ inline constexpr double kUnloadHoldPs = 50.0;
 inline constexpr int kGripSegments = 1;
 inline constexpr double kVdwDampingRatio = 0.03;
 inline constexpr double kLocalDamping = 0.1;
+inline constexpr double kTemperatureK = 0.0;
 }  // namespace defaults
 
 namespace ranges {
@@ -74,6 +75,7 @@ inline constexpr Range kHoldPs = closed(0.0, 1e6, "ps");
 inline constexpr Range kUnloadHoldPs = closed(0.0, 1e6, "ps");
 inline constexpr Range kVdwDampingRatio = closed(0.0, 1.0, "");
 inline constexpr Range kLocalDamping = closed(0.0, 0.99, "");
+inline constexpr Range kTemperatureK = closed(0.0, 2000.0, "K");
 inline constexpr std::size_t kNameMaxChars = 200;
 }  // namespace ranges
 

@@ -56,6 +56,7 @@ void default_twist(mdem::v1::TwistSpec& t) {
   if (!t.has_grip_segments()) t.set_grip_segments(d::kGripSegments);
   if (!t.has_vdw_damping_ratio()) t.set_vdw_damping_ratio(d::kVdwDampingRatio);
   if (!t.has_local_damping()) t.set_local_damping(d::kLocalDamping);
+  if (!t.has_temperature_k()) t.set_temperature_k(d::kTemperatureK);
 }
 
 }  // namespace

@@ -244,6 +244,7 @@ void check_damping(const mdem::v1::TwistSpec& t, Report& rep) {
   rep.real("twist.vdw_damping_ratio", t.has_vdw_damping_ratio(), t.vdw_damping_ratio(),
            r::kVdwDampingRatio);
   rep.real("twist.local_damping", t.has_local_damping(), t.local_damping(), r::kLocalDamping);
+  rep.real("twist.temperature_k", t.has_temperature_k(), t.temperature_k(), r::kTemperatureK);
 }
 
 void check_twist(const mdem::v1::TwistSpec& t, Report& rep) {

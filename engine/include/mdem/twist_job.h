@@ -15,6 +15,10 @@ struct TwistJobSpec {
   RopeSpec rope;
   TwistLoading loading;             // internal units (eV, eV/ps, ps)
   double vdw_damping_ratio = 0.03;  // ψ of the vdW contact dashpots; 0 = none
+  // Seeded random velocities and spins of this temperature at the start (K; 0 = at rest): a
+  // perfect lattice is symmetric, and only noise lets an instability (buckling, coiling) start.
+  double temperature_k = 0;
+  unsigned seed = 1;
 };
 
 // Everything the twist job reports at one instant.

@@ -25,6 +25,8 @@ inline constexpr double kGramPerCm3InAmuPerNm3 = 1e-3 / 1e21 / kAmuKg;  // 602.2
 inline constexpr double kPerFemtosecond = 1e3;
 // Time: 1 fs = 1e-3 ps.
 inline constexpr double kFemtosecond = 1e-3;
+// Boltzmann constant in eV/K (CODATA 2018, exact: 1.380649e-23 J/K over e).
+inline constexpr double kBoltzmann = 1.380649e-23 / kElectronVoltJ;  // 8.617333e-5
 
 // Convenience converters, user unit -> internal.
 constexpr double amu(double m) { return m * kAmu; }
