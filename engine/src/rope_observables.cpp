@@ -12,8 +12,6 @@
 namespace mdem {
 namespace {
 
-Vec3 perpendicular(const Vec3& r, const Vec3& n) { return r - r.dot(n) * n; }
-
 double point_segment_distance(const Vec3& p, const Vec3& a, const Vec3& b) {
   const Vec3 ab = b - a;
   const double L2 = ab.squaredNorm();

@@ -15,8 +15,6 @@ double inertia_about(const Elements& el, std::size_t i, const Vec3& n) {
   return nb.dot(el.inertia[i].cwiseProduct(nb));
 }
 
-Vec3 perpendicular(const Vec3& r, const Vec3& n) { return r - r.dot(n) * n; }
-
 }  // namespace
 
 std::string_view twist_phase_name(TwistPhase p) {

@@ -10,6 +10,9 @@ using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
 using Quat = Eigen::Quaterniond;
 
+// The part of r perpendicular to the unit vector n.
+inline Vec3 perpendicular(const Vec3& r, const Vec3& n) { return r - r.dot(n) * n; }
+
 inline Mat3 skew(const Vec3& a) {
   Mat3 s;
   s << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
