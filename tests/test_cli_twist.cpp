@@ -169,6 +169,16 @@ TEST(CliTwist, BadValuesAreRefusedNamingFieldAndRange) {
   EXPECT_FALSE(fs::exists(db));  // nothing was queued or stored
 }
 
+// A step inside the spec's range but above this rope's safe limit is refused by the engine with
+// the limit in the message, before any job is stored.
+TEST(CliTwist, StepAboveTheSafeLimitIsRefusedBeforeAnythingIsStored) {
+  const std::string db = (temp_dir() / "dt.db").string();
+  const Result r = run(with(kSmall, {"--db", db, "--dt", "0.5"}));
+  EXPECT_EQ(r.code, mdem::cli::kUsage) << r.err;
+  EXPECT_NE(r.err.find("safe limit"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(db));
+}
+
 TEST(CliTwist, MissingValuesUnknownFlagsAndBadSpecFiles) {
   const fs::path d = temp_dir();
   EXPECT_EQ(run({"--torque"}).code, mdem::cli::kUsage);

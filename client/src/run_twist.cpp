@@ -161,6 +161,8 @@ std::string describe(const spec::SpecError& e) {
 int execute(const Parsed& p, std::ostream& out, std::ostream& err) {
   const EngineJob ej = twist_engine_job(p.spec);
   TwistJob job(ej.twist, ej.settings);
+  // A time step above the safe limit is refused here, before anything is stored.
+  job.system().initialize();
   ResultsStore store(p.db);
   JobRecord rec;
   rec.id = ResultsStore::new_job_id();
