@@ -181,3 +181,25 @@ TEST(TwistJob, InitialTemperatureFollowsEquipartitionAndTheSeed) {
 
 }  // namespace
 }  // namespace mdem
+
+namespace mdem {
+namespace {
+
+// Cancelling stops the run loop between chunks and keeps everything reported so far: the frames
+// up to the stop, whose last one is the state the run stopped in.
+TEST(RunJob, CancelStopsEarlyAndKeepsTheFramesSoFar) {
+  TwistJob job(small_rope(2, 12, 2.0, 50), damped(0.1));
+  std::vector<SeriesFrame> frames;
+  JobObserver obs;
+  obs.frame = [&](const SeriesFrame& f) { frames.push_back(f); };
+  obs.cancelled = [&] { return frames.size() >= 5; };
+  const JobRunResult r = run_job(job, {1.0, 0}, obs);
+  EXPECT_TRUE(r.cancelled);
+  ASSERT_EQ(frames.size(), 5u);
+  EXPECT_EQ(frames.back().step, r.steps);
+  EXPECT_EQ(r.steps, job.system().steps());
+  EXPECT_LT(job.system().time(), 0.2 * job.duration());
+}
+
+}  // namespace
+}  // namespace mdem
