@@ -221,18 +221,10 @@ int execute(const Parsed& p, std::ostream& out, std::ostream& err) {
   doc["state"] = state;
   if (!reason.empty()) doc["reason"] = reason;
   doc["summary"] = state == "FAILED" ? json::object() : summary_json(job.summary());
-  json acc;
-  if (state != "FAILED") acc["energy_balance_error"] = sys.energy_balance_error();
-  acc["dt_ps"] = sys.dt();
-  acc["critical_dt_ps"] = sys.critical_dt();
-  acc["dt_over_critical"] = sys.dt() / sys.critical_dt();
-  doc["accuracy"] = acc;
-  json perf;
-  perf["wall_s"] = wall;
-  perf["steps"] = sys.steps();
-  perf["threads"] = sys.threads();
-  perf["element_steps_per_s"] = wall > 0 ? static_cast<double>(n) * sys.steps() / wall : 0.0;
-  doc["performance"] = perf;
+  doc["accuracy"] = accuracy_json(sys, state != "FAILED");
+  doc["performance"] = performance_json(sys, wall);
+  const json& acc = doc["accuracy"];
+  const json& perf = doc["performance"];
   doc["db"] = store.path();
   store.finish_job(rec.id, state, reason, doc.dump());
 
