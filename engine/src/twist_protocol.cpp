@@ -149,10 +149,10 @@ void TwistProtocol::apply(System& sys, double t) {
     }
   }
   last_phase_ = p;
-  applied_ = torque_at(t);
   if (relax_bc && p != TwistPhase::Loading) return;
-  load_grip(el, grip_a_, -applied_);
-  load_grip(el, grip_b_, applied_);
+  const double torque = torque_at(t);
+  load_grip(el, grip_a_, -torque);
+  load_grip(el, grip_b_, torque);
 }
 
 }  // namespace mdem

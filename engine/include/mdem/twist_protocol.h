@@ -76,7 +76,6 @@ class TwistProtocol {
   const std::vector<std::size_t>& grip_a() const { return grip_a_; }
   const std::vector<std::size_t>& grip_b() const { return grip_b_; }
   const Vec3& axis() const { return axis_; }
-  double applied_torque() const { return applied_; }  // at the last apply()
 
  private:
   void load_grip(Elements& el, const std::vector<std::size_t>& grip, double torque) const;
@@ -87,7 +86,6 @@ class TwistProtocol {
   std::vector<std::size_t> grip_a_, grip_b_;
   Vec3 axis_;
   TwistPhase last_phase_ = TwistPhase::Loading;
-  double applied_ = 0;
 };
 
 // Moment about `axis` (through the grip's mass centroid) of the internal forces and torques on a
