@@ -10,6 +10,7 @@
 #include <string>
 
 #include "mdem/force_model.h"
+#include "mdem/state_io.h"
 
 namespace mdem {
 
@@ -239,6 +240,45 @@ void NeighborList::build(const Elements& el) {
 
   x_at_build_.assign(el.x.begin(), el.x.end());
   ++builds_;
+}
+
+void NeighborList::save_state(StateWriter& w) const {
+  w.begin("neighbor_list");
+  w.put(cutoff_);
+  w.put(skin_);
+  w.put(static_cast<std::uint64_t>(builds_));
+  w.put(x_at_build_);
+  w.put(offsets_);
+  w.put(neighbors_);
+}
+
+void NeighborList::load_state(StateReader& r, std::size_t n) {
+  r.begin("neighbor_list");
+  const auto cutoff = r.get<double>("cutoff"), skin = r.get<double>("skin");
+  if (cutoff != cutoff_ || skin != skin_)
+    r.fail("cutoff", "list of cutoff " + std::to_string(cutoff) + " nm and skin " +
+                         std::to_string(skin) + " nm, this job uses " + std::to_string(cutoff_) +
+                         " and " + std::to_string(skin_) + " nm");
+  const auto builds = r.get<std::uint64_t>("builds");
+  std::vector<Vec3> x;
+  std::vector<std::uint32_t> offsets, neighbors;
+  r.get(x, "x_at_build", n);
+  r.get(offsets, "offsets", n + 1);
+  r.get(neighbors, "neighbors");
+  // A corrupt list would send the pair loops out of bounds: check the CSR before using it.
+  if (offsets[0] != 0 || offsets[n] != neighbors.size())
+    r.fail("offsets", "do not span the neighbour array");
+  for (std::size_t i = 0; i < n; ++i) {
+    if (offsets[i] > offsets[i + 1]) r.fail("offsets", "decrease at element " + std::to_string(i));
+    for (std::uint32_t k = offsets[i]; k < offsets[i + 1]; ++k)
+      if (neighbors[k] <= i || neighbors[k] >= n)
+        r.fail("neighbors",
+               "entry " + std::to_string(k) + " is not an element after " + std::to_string(i));
+  }
+  builds_ = static_cast<std::size_t>(builds);
+  x_at_build_ = std::move(x);
+  offsets_ = std::move(offsets);
+  neighbors_ = std::move(neighbors);
 }
 
 }  // namespace mdem

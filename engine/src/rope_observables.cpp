@@ -7,6 +7,7 @@
 #include <unordered_map>
 
 #include "mdem/cnt.h"
+#include "mdem/state_io.h"
 #include "mdem/twist_protocol.h"
 
 namespace mdem {
@@ -242,6 +243,16 @@ double ShiftAngle::update(const Elements& el, const RopeAxis& axis) {
                      grip_rotation(el, rope_->grip_a, ref_a_, axis);
   angle_ += std::remainder(rel - angle_, 2.0 * std::numbers::pi);
   return angle_;
+}
+
+void ShiftAngle::save_state(StateWriter& w) const {
+  w.begin("shift_angle");
+  w.put(angle_);
+}
+
+void ShiftAngle::load_state(StateReader& r) {
+  r.begin("shift_angle");
+  angle_ = r.get<double>("angle");
 }
 
 }  // namespace mdem

@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -103,6 +104,28 @@ inline void kick_anisotropic(const Quat& q, const Vec3& I, Vec3& w, const Vec3& 
   w = world_inertia_inverse_times(q, I, L);
 }
 
+// Adds body(i, a, b)'s contributions to a and b over i in [0, n), threaded, in a fixed order:
+// each thread sums its static block into its own slot and the slots are added in thread order.
+// OpenMP's reduction(+) adds the threads' sums in the order they finish, which changes the last
+// bits from run to run, so a run (and a run resumed from a checkpoint) would not repeat exactly.
+template <class Body>
+void ordered_sums(long n, std::vector<std::array<double, 2>>& partial, double& a, double& b,
+                  Body body) {
+  std::fill(partial.begin(), partial.end(), std::array<double, 2>{0.0, 0.0});
+  const int team = static_cast<int>(partial.size());
+#pragma omp parallel num_threads(team) if (n >= kParallelMinItems)
+  {
+    double ta = 0, tb = 0;
+#pragma omp for schedule(static)
+    for (long i = 0; i < n; ++i) body(i, ta, tb);
+    partial[omp_get_thread_num()] = {ta, tb};
+  }
+  for (const auto& p : partial) {
+    a += p[0];
+    b += p[1];
+  }
+}
+
 }  // namespace
 
 System::System(Elements el, IntegratorSettings s) : el_(std::move(el)), settings_(s) {}
@@ -161,6 +184,7 @@ void System::initialize() {
 
   const std::size_t n = el_.size();
   sink_.resize(n, threads_, model_damping);
+  partial_sums_.assign(threads_, {0.0, 0.0});
   fd_.assign(n, Vec3::Zero());
   td_.assign(n, Vec3::Zero());
 
@@ -239,11 +263,10 @@ void System::compute_forces() {
 void System::update_kinetic() {
   double kt = 0, kr = 0;
   const long n = static_cast<long>(el_.size());
-#pragma omp parallel for schedule(static) reduction(+ : kt, kr) if (n >= kParallelMinItems)
-  for (long i = 0; i < n; ++i) {
-    kt += 0.5 * el_.mass[i] * el_.v[i].squaredNorm();
-    kr += 0.5 * el_.w[i].dot(world_inertia_times(el_.q[i], el_.inertia[i], el_.w[i]));
-  }
+  ordered_sums(n, partial_sums_, kt, kr, [this](long i, double& kt_i, double& kr_i) {
+    kt_i += 0.5 * el_.mass[i] * el_.v[i].squaredNorm();
+    kr_i += 0.5 * el_.w[i].dot(world_inertia_times(el_.q[i], el_.inertia[i], el_.w[i]));
+  });
   ledger_.kinetic_translational = kt;
   ledger_.kinetic_rotational = kr;
 }
@@ -297,8 +320,8 @@ void System::run(long nsteps) {
     double work = 0, diss = 0;
     // 1. First half kick with the forces at t_n; book half of the work of external loads and
     //    constraints over the coming drift, and the power of damping at v_n.
-#pragma omp parallel for schedule(static) reduction(+ : work, diss) if (n >= kParallelMinItems)
-    for (long i = 0; i < n; ++i) {
+    // (work and diss in the body are the thread's partial sums.)
+    ordered_sums(n, partial_sums_, work, diss, [&](long i, double& work, double& diss) {
       const auto& dof = E.dof[i];
       for (int k = 0; k < 3; ++k)
         first_half_kick(dof[k], E.v[i][k], E.f[i][k], E.f_ext[i][k], fd_[i][k],
@@ -313,7 +336,7 @@ void System::run(long nsteps) {
         kick_anisotropic(E.q[i], E.inertia[i], E.w[i], E.t[i] + E.t_ext[i] + td_[i], h);
         work += E.t_ext[i].dot(E.w[i]) * h;
       }
-    }
+    });
 
     // 2. Drift: positions, and orientations by the exact exponential map (isotropic bodies,
     //    where ω is constant in free rotation) or the DLM splitting (anisotropic).
@@ -352,8 +375,7 @@ void System::run(long nsteps) {
 
     // 3. Second half kick with the forces at t_{n+1}; the rest of the work and damping books.
     long bad = -1;
-#pragma omp parallel for schedule(static) reduction(+ : work, diss) reduction(max : bad) if (n >= kParallelMinItems)
-    for (long i = 0; i < n; ++i) {
+    ordered_sums(n, partial_sums_, work, diss, [&](long i, double& work, double& diss) {
       const auto& dof = E.dof[i];
       for (int k = 0; k < 3; ++k)
         second_half_kick(dof[k], E.v[i][k], E.f[i][k], E.f_ext[i][k], fd_[i][k],
@@ -368,8 +390,11 @@ void System::run(long nsteps) {
         kick_anisotropic(E.q[i], E.inertia[i], E.w[i], E.t[i] + E.t_ext[i] + td_[i], h);
         diss -= td_[i].dot(E.w[i]) * h;
       }
-      if (!E.v[i].allFinite() || !E.w[i].allFinite()) bad = std::max(bad, i);
-    }
+      if (!E.v[i].allFinite() || !E.w[i].allFinite()) {
+#pragma omp critical(mdem_system_bad_velocity)
+        bad = std::max(bad, i);
+      }
+    });
     if (bad >= 0) check_finite_forces();  // names the element and the cause
     if (bad >= 0)
       throw NumericalError("non-finite velocity of " + describe(E, static_cast<std::size_t>(bad)) +

@@ -41,13 +41,39 @@ TwistJob::TwistJob(const TwistJobSpec& spec, IntegratorSettings settings)
   shift_ = std::make_shared<ShiftAngle>(sys_.elements(), rope_);
   auto protocol = protocol_;
   sys_.add_updater([protocol](System& s, double t) { protocol->apply(s, t); });
-  // The shift angle is unwrapped from samples less than a half turn apart: sample every 10 steps.
+  // The shift angle is unwrapped from samples less than a half turn apart: sample every 10 steps,
+  // counted by the system (not the updater) so a job restored from a checkpoint samples at the
+  // same steps.
   auto shift = shift_;
   const Rope* rope = &rope_;
   double* angle = &shift_angle_;
-  sys_.add_updater([shift, rope, angle, calls = 0L](System& s, double) mutable {
-    if (calls++ % 10 == 0) *angle = shift->update(s.elements(), rope_axis(s.elements(), *rope));
+  sys_.add_updater([shift, rope, angle](System& s, double) {
+    if (s.steps() % 10 == 0) *angle = shift->update(s.elements(), rope_axis(s.elements(), *rope));
   });
+}
+
+void TwistJob::save_state(StateWriter& w) const {
+  sys_.save_state(w);
+  protocol_->save_state(w);
+  shift_->save_state(w);
+  w.begin("twist_report");
+  w.put(shift_angle_);
+  w.put(max_charge_);
+  w.put(peak_twist_);
+  w.put(peak_shift_);
+}
+
+void TwistJob::load_state(StateReader& r) {
+  // The system's load initializes it, which runs the updaters at the state as built: the
+  // protocol's and the shift angle's state are loaded after it, overwriting what that changed.
+  sys_.load_state(r);
+  protocol_->load_state(r);
+  shift_->load_state(r);
+  r.begin("twist_report");
+  shift_angle_ = r.get<double>("shift_angle");
+  max_charge_ = r.get<int>("max_charge");
+  peak_twist_ = r.get<double>("peak_twist");
+  peak_shift_ = r.get<double>("peak_shift");
 }
 
 std::vector<EnergyTerm> TwistJob::energy_terms() {

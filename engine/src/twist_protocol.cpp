@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "mdem/elements.h"
+#include "mdem/state_io.h"
 #include "mdem/system.h"
 
 namespace mdem {
@@ -153,6 +154,44 @@ void TwistProtocol::apply(System& sys, double t) {
   const double torque = torque_at(t);
   load_grip(el, grip_a_, -torque);
   load_grip(el, grip_b_, torque);
+}
+
+void TwistProtocol::save_state(StateWriter& w) const {
+  w.begin("twist_protocol");
+  const TwistLoading& l = loading_;
+  w.put(l.torque_max);
+  w.put(l.rate);
+  w.put(l.hold);
+  w.put(l.boundary);
+  w.put(l.unload);
+  w.put(l.unload_hold);
+  w.put(l.grip_load);
+  w.put(last_phase_);
+}
+
+void TwistProtocol::load_state(StateReader& r) {
+  r.begin("twist_protocol");
+  // The loading comes from the job's spec; a checkpoint of another loading would continue a
+  // different experiment.
+  TwistLoading s;
+  s.torque_max = r.get<double>("torque_max");
+  s.rate = r.get<double>("rate");
+  s.hold = r.get<double>("hold");
+  s.boundary = r.get<TwistBoundary>("boundary");
+  s.unload = r.get_bool("unload");
+  s.unload_hold = r.get<double>("unload_hold");
+  s.grip_load = r.get<GripLoad>("grip_load");
+  const TwistLoading& l = loading_;
+  if (s.torque_max != l.torque_max || s.rate != l.rate || s.hold != l.hold ||
+      s.boundary != l.boundary || s.unload != l.unload || s.unload_hold != l.unload_hold ||
+      s.grip_load != l.grip_load)
+    r.fail("loading",
+           "the checkpoint's twist loading (torque, rate, hold times, boundary or grip "
+           "load) differs from this job's");
+  const auto phase = r.get<TwistPhase>("last phase");
+  if (static_cast<int>(phase) < 0 || static_cast<int>(phase) > static_cast<int>(TwistPhase::Done))
+    r.fail("last phase", "holds an unknown phase " + std::to_string(static_cast<int>(phase)));
+  last_phase_ = phase;
 }
 
 }  // namespace mdem

@@ -16,6 +16,8 @@
 namespace mdem {
 
 class NeighborList;
+class StateWriter;
+class StateReader;
 
 // Loops over fewer items than this run on one thread: waking a team costs more than it saves, and
 // on a loaded machine spinning threads can cost far more.
@@ -91,6 +93,11 @@ class ForceModel {
   // Adds this model's stiffness bounds at the current state.
   virtual void add_stiffness(const Elements& el, const NeighborList* pairs,
                              StiffnessSums& s) const = 0;
+
+  // State that changes during a run (a bond's plastic slip, broken flags), for checkpoints; the
+  // system saves and loads it in a section named after the model. Stateless models keep these.
+  virtual void save_state(StateWriter&) const {}
+  virtual void load_state(StateReader&) {}
 };
 
 using ForceModelPtr = std::unique_ptr<ForceModel>;

@@ -11,6 +11,7 @@
 
 #include "mdem/energy.h"
 #include "mdem/snapshot.h"
+#include "mdem/state_io.h"
 #include "mdem/system.h"
 
 namespace mdem {
@@ -33,7 +34,22 @@ class Job {
   virtual Summary summary() = 0;
   // A few words on where the protocol is ("loading", "holding"), for progress lines.
   virtual std::string phase() const { return {}; }
+
+  // Checkpoints: the system and every bit of protocol and observer state a run changes, so that
+  // a job built anew from the same spec, with the same thread count, and loaded from the bytes,
+  // continues under run_job bit-identically. Save at a step boundary (JobObserver::checkpoint).
+  // load_state throws CheckpointError for a checkpoint of another scene, loading or thread count;
+  // the job must be discarded then. Kinds that cannot checkpoint throw CheckpointError.
+  virtual bool can_checkpoint() const { return false; }
+  virtual void save_state(StateWriter& w) const;
+  virtual void load_state(StateReader& r);
 };
+
+// A job's checkpoint as bytes: header (format and version), the job's kind, then its state.
+std::string save_checkpoint(const Job& job);
+// Loads bytes from save_checkpoint into a freshly built job; run_job then continues the run.
+// Throws CheckpointError (corrupt or truncated bytes, another kind, scene or thread count).
+void load_checkpoint(Job& job, std::string_view bytes);
 
 // Energy columns for the given stored terms, then kinetic (translational, rotational), external
 // work, dissipated, total and the balance residual; all in eV, names ending in "_eV".
@@ -57,6 +73,9 @@ struct JobObserver {
   std::function<void(const Snapshot&)> snapshot;
   std::function<void(const JobProgress&)> progress;  // about every 0.5 % of the run
   std::function<bool()> cancelled;                   // polled between chunks of steps
+  // Called after every chunk of steps (often: every few steps on a large system), with the state
+  // consistent at that step and everything due at it reported: the caller may save_state now.
+  std::function<void(long step)> checkpoint;
 };
 
 struct JobRunResult {
@@ -64,9 +83,13 @@ struct JobRunResult {
   bool cancelled = false;
 };
 
-// Initializes the system, then runs ceil(duration / dt) steps, reporting a frame at step 0, every
-// frame_every_ps and at the end, and snapshots likewise (none when snapshot_every_ps is 0).
-// Throws NumericalError or ConfigError from the system; what was reported before stays valid.
+// Initializes the system, then runs it to step ceil(duration / dt), reporting a frame at step 0,
+// every frame_every_ps and at the end, and snapshots likewise (none when snapshot_every_ps is 0).
+// A job whose system is past step 0 (restored from a checkpoint) continues from its step without
+// initializing or reporting step 0 again: every cadence counts absolute steps, so it reports
+// exactly what an uninterrupted run reports after that step. JobRunResult::steps is the step
+// reached. Throws NumericalError or ConfigError from the system; what was reported before stays
+// valid.
 JobRunResult run_job(Job& job, const JobCadence& cadence, const JobObserver& observer);
 
 }  // namespace mdem

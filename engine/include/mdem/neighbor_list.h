@@ -9,6 +9,9 @@
 
 namespace mdem {
 
+class StateWriter;
+class StateReader;
+
 class NeighborList {
  public:
   // Pairs closer than cutoff + skin at build time are listed.
@@ -33,6 +36,12 @@ class NeighborList {
   // Neighbours j > i of element i: neighbors()[offsets()[i] .. offsets()[i+1]).
   const std::vector<std::uint32_t>& offsets() const { return offsets_; }
   const std::vector<std::uint32_t>& neighbors() const { return neighbors_; }
+
+  // The list and the positions it was built at, for checkpoints: a resumed run rebuilds at the
+  // same steps, and between rebuilds iterates the same pairs in the same order. load_state checks
+  // cutoff and skin and that the list is well-formed for n_elements (throws CheckpointError).
+  void save_state(StateWriter& w) const;
+  void load_state(StateReader& r, std::size_t n_elements);
 
  private:
   double cutoff_, skin_;

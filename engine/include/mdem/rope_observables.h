@@ -10,6 +10,9 @@
 
 namespace mdem {
 
+class StateWriter;
+class StateReader;
+
 // The rope's axis: through the mass centroids of the two grips, from grip a to grip b.
 struct RopeAxis {
   Vec3 origin = Vec3::Zero();  // midpoint of the two grip centroids
@@ -60,6 +63,11 @@ class ShiftAngle {
  public:
   ShiftAngle(const Elements& reference, const Rope& rope);
   double update(const Elements& el, const RopeAxis& axis);  // radians
+  double angle() const { return angle_; }
+  // The unwrapped angle (the reference offsets come from the job's build), for checkpoints.
+  void save_state(StateWriter& w) const;
+  void load_state(StateReader& r);
+
  private:
   double grip_rotation(const Elements& el, const std::vector<std::size_t>& grip,
                        const std::vector<Vec3>& ref, const RopeAxis& axis) const;

@@ -2,6 +2,7 @@
 // A simulated system: elements, the force models a scene asked for, an optional neighbour list
 // (built only when some model acts on pairs), and the velocity-Verlet integrator with energy
 // bookkeeping, the critical-step check and the run guard.
+#include <array>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -15,6 +16,9 @@
 #include "mdem/neighbor_list.h"
 
 namespace mdem {
+
+class StateWriter;
+class StateReader;
 
 // A run that went numerically wrong: says at which step, which element and the likely cause.
 class NumericalError : public std::runtime_error {
@@ -89,6 +93,18 @@ class System {
   // the state is then that of the failing step and must not be reported as a result.
   void run(long n);
   void step() { run(1); }
+  bool initialized() const { return initialized_; }
+
+  // Checkpoints: everything a run changes (element state, loads and DOF modes, the forces of the
+  // last evaluation, energy ledger and guard figures, time, step count, dt, the neighbour list and
+  // each model's state), so that after load_state the next run() continues exactly as the saved
+  // system would have. load_state initializes the system (models and settings come from the
+  // job's spec, not the checkpoint), then overwrites its state; it throws CheckpointError when the
+  // checkpoint is of another scene (element count or properties differ, other models) or thread
+  // count (forces are summed per thread, so only the same count reproduces the run), and leaves
+  // the system unusable then. Updaters hold their own state: their owner saves it.
+  void save_state(StateWriter& w) const;
+  void load_state(StateReader& r);
 
   double time() const { return time_; }
   long steps() const { return steps_; }
@@ -127,6 +143,7 @@ class System {
   ForceSink sink_;
   std::vector<Vec3> fd_, td_;  // damping force / torque (model dampers + local damping)
   std::vector<Vec3> f_prev_, t_prev_, fext_prev_, text_prev_;  // for work bookkeeping
+  std::vector<std::array<double, 2>> partial_sums_;  // per thread, for sums in a fixed order
   EnergyLedger ledger_;
   double energy_scale_ = 0;  // energy in play, for relative errors
   double initial_kinetic_ = 0, initial_stored_ = 0;

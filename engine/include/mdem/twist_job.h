@@ -52,6 +52,9 @@ class TwistJob final : public Job {
   std::vector<double> observe() override;
   Summary summary() override;
   std::string phase() const override;
+  bool can_checkpoint() const override { return true; }
+  void save_state(StateWriter& w) const override;
+  void load_state(StateReader& r) override;
 
   TwistReport report();
   const Rope& rope() const { return rope_; }

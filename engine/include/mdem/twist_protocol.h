@@ -29,6 +29,8 @@ namespace mdem {
 
 class System;
 struct Elements;
+class StateWriter;
+class StateReader;
 
 enum class TwistBoundary { ConstantMoment, TwistRelaxation };
 
@@ -76,6 +78,11 @@ class TwistProtocol {
   const std::vector<std::size_t>& grip_a() const { return grip_a_; }
   const std::vector<std::size_t>& grip_b() const { return grip_b_; }
   const Vec3& axis() const { return axis_; }
+
+  // The phase apply() last saw (it acts on phase changes), for checkpoints. load_state throws
+  // CheckpointError when the checkpoint's loading differs from this protocol's.
+  void save_state(StateWriter& w) const;
+  void load_state(StateReader& r);
 
  private:
   void load_grip(Elements& el, const std::vector<std::size_t>& grip, double torque) const;
