@@ -15,12 +15,6 @@ int run_twist(const std::vector<std::string>& args, std::ostream& out, std::ostr
 // Runs one `mdem run <kind>` body and turns what it throws into an exit code and a message
 // prefixed with `command`: a bad flag (UsageError) or an impossible setting (ConfigError,
 // std::invalid_argument) is a usage error, anything else a failed job.
-// The `accuracy` object of a job report: the energy-balance error (only for a run that did not
-// fail), dt, the critical step and their ratio.
-json accuracy_json(const System& sys, bool with_balance);
-// The `performance` object: wall time, steps, threads and element-steps per second.
-json performance_json(const System& sys, double wall_s);
-
 int guarded_run(const std::string& command, const std::function<int()>& body, std::ostream& err);
 
 }  // namespace mdem::cli

@@ -9,6 +9,7 @@
 #include "jobs.h"
 #include "mdem/bundle_scene.h"
 #include "mdem/cli.h"
+#include "mdem/spec_job.h"
 #include "mdem/units.h"
 
 namespace mdem::cli {
@@ -153,25 +154,6 @@ int run_bundle(const RunOptions& o, std::ostream& out, std::ostream& err) {
 }
 
 }  // namespace
-
-json accuracy_json(const System& sys, bool with_balance) {
-  json acc;
-  if (with_balance) acc["energy_balance_error"] = sys.energy_balance_error();
-  acc["dt_ps"] = sys.dt();
-  acc["critical_dt_ps"] = sys.critical_dt();
-  acc["dt_over_critical"] = sys.dt() / sys.critical_dt();
-  return acc;
-}
-
-json performance_json(const System& sys, double wall_s) {
-  const double n = static_cast<double>(sys.elements().size());
-  json perf;
-  perf["wall_s"] = wall_s;
-  perf["steps"] = sys.steps();
-  perf["threads"] = sys.threads();
-  perf["element_steps_per_s"] = wall_s > 0 ? n * sys.steps() / wall_s : 0.0;
-  return perf;
-}
 
 int guarded_run(const std::string& command, const std::function<int()>& body, std::ostream& err) {
   try {

@@ -1,0 +1,42 @@
+#pragma once
+// A finalized job spec (mdem::spec::finalize) turned into the engine's terms, and the JSON report
+// of a finished job. One place for both, so `mdem run` in-process and the daemon's workers build,
+// run and report a job identically.
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
+
+#include "mdem/job.h"
+#include "mdem/twist_job.h"
+#include "mdem/v1/job.pb.h"
+
+namespace mdem {
+
+// The twist job's engine spec, integrator settings and output cadence of a finalized spec.
+TwistJobSpec twist_job_spec(const v1::JobSpec& spec);
+IntegratorSettings integrator_settings(const v1::JobSpec& spec);
+JobCadence job_cadence(const v1::JobSpec& spec);
+
+// "twist", ... for the kind the spec holds; "" for none.
+std::string_view job_kind_name(const v1::JobSpec& spec);
+// An upper bound of the job's element count from the spec alone (nothing built), so a daemon
+// can refuse an oversized job cheaply.
+long element_bound(const v1::JobSpec& spec);
+
+// Builds the engine job of a finalized spec. threads > 0 overrides the spec's thread count (the
+// daemon gives each job its share of the machine). Throws std::invalid_argument for an impossible
+// scene or load and std::invalid_argument for a spec of a kind this build cannot run.
+std::unique_ptr<Job> make_spec_job(const v1::JobSpec& spec, int threads = 0);
+
+// The report of a job that ran (or stopped): {job_id, kind, state, reason?, summary, accuracy,
+// performance}. Keys in this order; the summary is empty for a FAILED job (its state is not a
+// result), and the energy-balance error is left out then.
+using ReportJson = nlohmann::ordered_json;
+ReportJson summary_json(const Summary& s);
+ReportJson accuracy_json(const System& sys, bool with_balance);
+ReportJson performance_json(const System& sys, double wall_s);
+ReportJson job_report(Job& job, const std::string& job_id, const std::string& state,
+                      const std::string& reason, double wall_s);
+
+}  // namespace mdem

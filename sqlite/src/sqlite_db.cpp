@@ -1,0 +1,126 @@
+#include "mdem/sqlite_db.h"
+
+#include <filesystem>
+
+namespace mdem {
+
+namespace fs = std::filesystem;
+
+SqliteDb::SqliteDb(std::string path, std::string label, const char* synchronous,
+                   int busy_timeout_ms)
+    : path_(std::move(path)), label_(std::move(label)) {
+  if (path_.empty()) throw SqliteError(label_ + ": empty path");
+  const fs::path parent = fs::path(path_).parent_path();
+  if (!parent.empty()) {
+    std::error_code ec;
+    fs::create_directories(parent, ec);
+    if (ec)
+      throw SqliteError(where() + ": cannot create the directory '" + parent.string() +
+                        "': " + ec.message());
+  }
+  const int rc =
+      sqlite3_open_v2(path_.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr);
+  if (rc != SQLITE_OK) fail("cannot open");
+  sqlite3_extended_result_codes(db_, 1);
+  sqlite3_busy_timeout(db_, busy_timeout_ms);
+  // The first statement reads the file header: a file that is not a database fails here.
+  exec("PRAGMA journal_mode=WAL", "cannot read (is it an SQLite database?)");
+  exec((std::string("PRAGMA synchronous=") + synchronous).c_str(), "cannot configure");
+  exec("PRAGMA foreign_keys=ON", "cannot configure");
+}
+
+SqliteDb::~SqliteDb() {
+  for (auto& [sql, s] : statements_) sqlite3_finalize(s);
+  if (db_) sqlite3_close_v2(db_);
+}
+
+void SqliteDb::fail(const std::string& what) const {
+  throw SqliteError(where() + ": " + what + ": " + (db_ ? sqlite3_errmsg(db_) : "out of memory"));
+}
+
+void SqliteDb::exec(const char* sql, const std::string& what) {
+  if (sqlite3_exec(db_, sql, nullptr, nullptr, nullptr) != SQLITE_OK) fail(what);
+}
+
+sqlite3_stmt* SqliteDb::prepare(const std::string& sql) {
+  auto it = statements_.find(sql);
+  if (it != statements_.end()) return it->second;
+  sqlite3_stmt* s = nullptr;
+  if (sqlite3_prepare_v3(db_, sql.c_str(), -1, SQLITE_PREPARE_PERSISTENT, &s, nullptr) != SQLITE_OK)
+    fail("cannot prepare '" + sql + "'");
+  statements_.emplace(sql, s);
+  return s;
+}
+
+bool SqliteDb::has_table(const std::string& name) {
+  Query q(*this, "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = ?", "cannot read");
+  q.bind(1, name);
+  return q.step();
+}
+
+bool SqliteDb::has_column(const std::string& table, const std::string& column) {
+  Query q(*this, "SELECT 1 FROM pragma_table_info(?) WHERE name = ?", "cannot read");
+  q.bind(1, table).bind(2, column);
+  return q.step();
+}
+
+Query::Query(SqliteDb& db, const std::string& sql, std::string what)
+    : db_(db), s_(db.prepare(sql)), what_(std::move(what)) {}
+
+Query::~Query() {
+  sqlite3_reset(s_);
+  sqlite3_clear_bindings(s_);
+}
+
+Query& Query::bind(int i, const std::string& text) {
+  return check(
+      sqlite3_bind_text(s_, i, text.data(), static_cast<int>(text.size()), SQLITE_TRANSIENT));
+}
+Query& Query::bind(int i, double v) { return check(sqlite3_bind_double(s_, i, v)); }
+Query& Query::bind(int i, long v) { return check(sqlite3_bind_int64(s_, i, v)); }
+Query& Query::bind_blob(int i, const std::string& bytes) {
+  return check(sqlite3_bind_blob64(s_, i, bytes.data(), bytes.size(), SQLITE_TRANSIENT));
+}
+
+bool Query::step() {
+  const int rc = sqlite3_step(s_);
+  if (rc == SQLITE_ROW) return true;
+  if (rc == SQLITE_DONE) return false;
+  db_.fail(what_);
+}
+
+void Query::run() {
+  while (step()) {
+  }
+  sqlite3_reset(s_);
+}
+
+std::string Query::text(int col) const {
+  const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(s_, col));
+  return p ? std::string(p, sqlite3_column_bytes(s_, col)) : std::string();
+}
+
+std::string Query::blob(int col) const {
+  const auto* p = static_cast<const char*>(sqlite3_column_blob(s_, col));
+  return p ? std::string(p, sqlite3_column_bytes(s_, col)) : std::string();
+}
+
+Query& Query::check(int rc) {
+  if (rc != SQLITE_OK) db_.fail(what_);
+  return *this;
+}
+
+Transaction::Transaction(SqliteDb& db) : db_(db) {
+  db_.exec("BEGIN IMMEDIATE", "cannot begin a write");
+}
+
+Transaction::~Transaction() {
+  if (!done_) sqlite3_exec(db_.handle(), "ROLLBACK", nullptr, nullptr, nullptr);
+}
+
+void Transaction::commit() {
+  db_.exec("COMMIT", "cannot commit");
+  done_ = true;
+}
+
+}  // namespace mdem
