@@ -1,0 +1,117 @@
+#include "checkpoint_file.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <cerrno>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+namespace mdem::server {
+namespace {
+
+constexpr char kMagic[8] = {'M', 'D', 'E', 'M', 'C', 'K', 'P', 'T'};
+constexpr std::uint32_t kVersion = 1;
+constexpr std::size_t kHeaderBytes = 8 + 4 + 8 + 8 + 4;  // magic, version, step, length, crc
+
+void put(std::string& out, std::uint64_t v, int bytes) {
+  for (int b = 0; b < bytes; ++b) out.push_back(static_cast<char>((v >> (8 * b)) & 0xff));
+}
+
+std::uint64_t get(const std::string& in, std::size_t at, int bytes) {
+  std::uint64_t v = 0;
+  for (int b = 0; b < bytes; ++b)
+    v |= static_cast<std::uint64_t>(static_cast<unsigned char>(in[at + b])) << (8 * b);
+  return v;
+}
+
+std::uint32_t crc_of(const std::string& s) {
+  uLong crc = crc32(0L, Z_NULL, 0);
+  const auto* p = reinterpret_cast<const Bytef*>(s.data());
+  std::size_t left = s.size();
+  while (left > 0) {  // crc32 takes a uInt length
+    const uInt n = static_cast<uInt>(std::min<std::size_t>(left, 1u << 30));
+    crc = crc32(crc, p, n);
+    p += n;
+    left -= n;
+  }
+  return static_cast<std::uint32_t>(crc);
+}
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  throw CheckpointFileError("checkpoint '" + path + "': " + what);
+}
+
+void write_all(int fd, const std::string& bytes, const std::string& path) {
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) fail(path, std::string("cannot write: ") + std::strerror(errno));
+    done += static_cast<std::size_t>(n);
+  }
+}
+
+}  // namespace
+
+void write_checkpoint(const std::string& path, const CheckpointData& data) {
+  std::string header(kMagic, 8);
+  put(header, kVersion, 4);
+  put(header, static_cast<std::uint64_t>(data.step), 8);
+  put(header, data.state.size(), 8);
+  put(header, crc_of(data.state), 4);
+  const std::string tmp = path + ".tmp";
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  if (fd < 0) fail(tmp, std::string("cannot create: ") + std::strerror(errno));
+  try {
+    write_all(fd, header, tmp);
+    write_all(fd, data.state, tmp);
+    if (::fsync(fd) != 0) fail(tmp, std::string("cannot flush: ") + std::strerror(errno));
+  } catch (...) {
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    throw;
+  }
+  ::close(fd);
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    ::unlink(tmp.c_str());
+    fail(path, "cannot replace: " + why);
+  }
+  // Make the rename itself durable.
+  const std::string dir = std::filesystem::path(path).parent_path().string();
+  const int dfd = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd >= 0) {
+    ::fsync(dfd);
+    ::close(dfd);
+  }
+}
+
+CheckpointData read_checkpoint(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, "cannot open (missing or unreadable)");
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (bytes.size() < kHeaderBytes)
+    fail(path, "truncated: " + std::to_string(bytes.size()) + " bytes, shorter than its header");
+  if (std::memcmp(bytes.data(), kMagic, 8) != 0) fail(path, "not an mdem checkpoint (bad magic)");
+  const auto version = static_cast<std::uint32_t>(get(bytes, 8, 4));
+  if (version != kVersion)
+    fail(path, "format version " + std::to_string(version) + ", this mdemd reads " +
+                   std::to_string(kVersion));
+  CheckpointData d;
+  d.step = static_cast<long>(get(bytes, 12, 8));
+  const std::uint64_t len = get(bytes, 20, 8);
+  const auto crc = static_cast<std::uint32_t>(get(bytes, 28, 4));
+  if (len != bytes.size() - kHeaderBytes)
+    fail(path, "truncated or padded: header says " + std::to_string(len) + " bytes of state, " +
+                   std::to_string(bytes.size() - kHeaderBytes) + " present");
+  d.state = bytes.substr(kHeaderBytes);
+  if (crc_of(d.state) != crc) fail(path, "damaged: CRC-32 mismatch");
+  return d;
+}
+
+}  // namespace mdem::server

@@ -1,0 +1,205 @@
+#include "job_service.h"
+
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <regex>
+
+#include "mdem/spec.h"
+#include "mdem/spec_job.h"
+
+namespace mdem::server {
+namespace {
+
+using grpc::Status;
+using grpc::StatusCode;
+
+constexpr int kWatchPageEvents = 64;
+constexpr std::size_t kWatchPageBytes = 4 << 20;
+
+Status internal(const std::exception& e) {
+  spdlog::error("event=rpc_failed error=\"{}\"", e.what());
+  return Status(StatusCode::INTERNAL, std::string("mdemd: ") + e.what());
+}
+
+}  // namespace
+
+Status JobServiceImpl::authenticate(const grpc::ServerContext* ctx, Identity& who) const {
+  const auto& md = ctx->client_metadata();
+  auto it = md.find("authorization");
+  if (it == md.end())
+    return Status(StatusCode::UNAUTHENTICATED,
+                  "no credentials: send 'authorization: Bearer <token>' (mdem --token-file)");
+  const std::string value(it->second.data(), it->second.size());
+  const std::string prefix = "Bearer ";
+  if (value.rfind(prefix, 0) != 0)
+    return Status(StatusCode::UNAUTHENTICATED, "the authorization header is not 'Bearer <token>'");
+  auto id = tokens_.find(value.substr(prefix.size()));
+  if (!id) return Status(StatusCode::UNAUTHENTICATED, "unknown token");
+  who = *id;
+  return Status::OK;
+}
+
+Status JobServiceImpl::visible_job(const Identity& who, const std::string& id, JobRow& row) {
+  if (id.empty()) return Status(StatusCode::INVALID_ARGUMENT, "job_id: required");
+  auto r = store_.get(id);
+  if (!r) return Status(StatusCode::NOT_FOUND, "no job '" + id + "'");
+  if (r->user != who.user && !who.admin)
+    return Status(
+        StatusCode::PERMISSION_DENIED,
+        "job '" + id + "' belongs to another user; only its owner or an admin may see it");
+  row = *r;
+  return Status::OK;
+}
+
+Status JobServiceImpl::SubmitJob(grpc::ServerContext* ctx, const v1::SubmitJobRequest* req,
+                                 v1::SubmitJobResponse* resp) {
+  Identity who;
+  if (Status s = authenticate(ctx, who); !s.ok()) return s;
+  static const std::regex id_re("[A-Za-z0-9._:-]{1,128}");
+  if (!std::regex_match(req->request_id(), id_re))
+    return Status(StatusCode::INVALID_ARGUMENT,
+                  "request_id: '" + req->request_id().substr(0, 200) +
+                      "' is not 1..128 characters of [A-Za-z0-9._:-]");
+  try {
+    v1::JobSpec spec;
+    try {
+      spec = spec::finalize(req->spec());
+    } catch (const spec::SpecError& e) {
+      return Status(StatusCode::INVALID_ARGUMENT, std::string("invalid job spec:\n") + e.what());
+    }
+    // The element count from the spec alone, before anything is built.
+    const long bound = element_bound(spec);
+    if (bound > config_.max_elements)
+      return Status(StatusCode::RESOURCE_EXHAUSTED,
+                    "the job has " + std::to_string(bound) + " elements, above this daemon's " +
+                        "limit max_elements = " + std::to_string(config_.max_elements));
+    const int threads = spec.run().threads() > 0
+                            ? std::min(spec.run().threads(), config_.threads_per_job)
+                            : config_.threads_per_job;
+    long elements = 0, total_steps = 0;
+    try {
+      std::unique_ptr<Job> job = make_spec_job(spec, 1);
+      job->system().initialize();  // refuses a time step above the safe limit
+      elements = static_cast<long>(job->system().elements().size());
+      total_steps = static_cast<long>(std::ceil(job->duration() / job->system().dt() - 1e-9));
+    } catch (const std::invalid_argument& e) {  // ConfigError included
+      return Status(StatusCode::INVALID_ARGUMENT, std::string("invalid job: ") + e.what());
+    } catch (const NumericalError& e) {
+      return Status(StatusCode::INVALID_ARGUMENT, std::string("invalid job: ") + e.what());
+    }
+    if (total_steps > config_.max_steps)
+      return Status(StatusCode::RESOURCE_EXHAUSTED,
+                    "the job needs " + std::to_string(total_steps) + " steps, above this " +
+                        "daemon's limit max_steps = " + std::to_string(config_.max_steps) +
+                        "; shorten it or raise dt");
+    SubmitResult r;
+    try {
+      r = store_.submit(who.user, req->request_id(), spec, std::string(job_kind_name(spec)),
+                        elements, total_steps, threads, config_.max_queued_per_user);
+    } catch (const LimitError& e) {
+      return Status(StatusCode::RESOURCE_EXHAUSTED, e.what());
+    }
+    *resp->mutable_job() = r.job.info();
+    resp->set_created(r.created);
+    if (r.created) {
+      spdlog::info("event=job_queued job={} user={} request={} elements={} steps={}", r.job.id,
+                   who.user, req->request_id(), elements, total_steps);
+      scheduler_.wake();
+    }
+    return Status::OK;
+  } catch (const std::exception& e) {
+    return internal(e);
+  }
+}
+
+Status JobServiceImpl::GetJob(grpc::ServerContext* ctx, const v1::GetJobRequest* req,
+                              v1::JobInfo* resp) {
+  Identity who;
+  if (Status s = authenticate(ctx, who); !s.ok()) return s;
+  try {
+    JobRow row;
+    if (Status s = visible_job(who, req->job_id(), row); !s.ok()) return s;
+    *resp = row.info();
+    return Status::OK;
+  } catch (const std::exception& e) {
+    return internal(e);
+  }
+}
+
+Status JobServiceImpl::ListJobs(grpc::ServerContext* ctx, const v1::ListJobsRequest* req,
+                                v1::ListJobsResponse* resp) {
+  Identity who;
+  if (Status s = authenticate(ctx, who); !s.ok()) return s;
+  if (req->all_users() && !who.admin)
+    return Status(StatusCode::PERMISSION_DENIED, "all_users: only admins list everyone's jobs");
+  if (req->limit() < 0 || req->limit() > 1000)
+    return Status(StatusCode::INVALID_ARGUMENT,
+                  "limit: " + std::to_string(req->limit()) + " is not in [0, 1000] (0 = 100)");
+  try {
+    const int limit = req->limit() == 0 ? 100 : req->limit();
+    for (const JobRow& r : store_.list(req->all_users() ? "" : who.user, limit))
+      *resp->add_jobs() = r.info();
+    return Status::OK;
+  } catch (const std::exception& e) {
+    return internal(e);
+  }
+}
+
+Status JobServiceImpl::CancelJob(grpc::ServerContext* ctx, const v1::CancelJobRequest* req,
+                                 v1::JobInfo* resp) {
+  Identity who;
+  if (Status s = authenticate(ctx, who); !s.ok()) return s;
+  try {
+    JobRow row;
+    if (Status s = visible_job(who, req->job_id(), row); !s.ok()) return s;
+    if (!row.finished()) {
+      const std::string reason = "cancelled by " + who.user;
+      if (scheduler_.cancel(row.id, reason))
+        spdlog::info("event=job_cancel job={} by={}", row.id, who.user);
+      // A running job stops at its next chunk of steps: wait (up to 2 s) to report the outcome.
+      const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+      while (std::chrono::steady_clock::now() < deadline) {
+        row = *store_.get(row.id);
+        if (row.finished()) break;
+        hub_.wait(hub_.generation(), std::chrono::milliseconds(50));
+      }
+    }
+    *resp = row.info();
+    return Status::OK;
+  } catch (const std::exception& e) {
+    return internal(e);
+  }
+}
+
+Status JobServiceImpl::WatchJob(grpc::ServerContext* ctx, const v1::WatchJobRequest* req,
+                                grpc::ServerWriter<v1::JobEvent>* writer) {
+  Identity who;
+  if (Status s = authenticate(ctx, who); !s.ok()) return s;
+  try {
+    JobRow row;
+    if (Status s = visible_job(who, req->job_id(), row); !s.ok()) return s;
+    if (req->from_seq() < 0 || req->from_seq() > row.last_seq + 1)
+      return Status(StatusCode::OUT_OF_RANGE,
+                    "from_seq: " + std::to_string(req->from_seq()) + " is not in [0, " +
+                        std::to_string(row.last_seq + 1) + "] (the job's next event)");
+    long next = std::max<long>(1, req->from_seq());
+    while (!ctx->IsCancelled()) {
+      const long gen = hub_.generation();
+      const auto events = store_.events(row.id, next, kWatchPageEvents, kWatchPageBytes);
+      for (const v1::JobEvent& e : events) {
+        if (!writer->Write(e)) return Status(StatusCode::CANCELLED, "the watcher went away");
+        next = e.seq() + 1;
+      }
+      if (!events.empty()) continue;
+      row = *store_.get(row.id);
+      if (row.finished() && next > row.last_seq) return Status::OK;
+      hub_.wait(gen, std::chrono::milliseconds(500));
+    }
+    return Status(StatusCode::CANCELLED, "the watcher went away");
+  } catch (const std::exception& e) {
+    return internal(e);
+  }
+}
+
+}  // namespace mdem::server

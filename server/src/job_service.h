@@ -1,0 +1,44 @@
+#pragma once
+// mdem.v1.JobService on the sync gRPC API: authentication by bearer token, per-user access,
+// spec validation before anything is queued, and WatchJob served from the durable event log (a
+// watcher reads at its own pace, so it can neither slow a job nor grow the daemon's memory).
+#include "config.h"
+#include "event_writer.h"
+#include "job_store.h"
+#include "mdem/v1/service.grpc.pb.h"
+#include "scheduler.h"
+#include "tokens.h"
+
+namespace mdem::server {
+
+class JobServiceImpl final : public v1::JobService::Service {
+ public:
+  JobServiceImpl(const DaemonConfig& config, const TokenTable& tokens, JobStore& store,
+                 Scheduler& scheduler, const EventHub& hub)
+      : config_(config), tokens_(tokens), store_(store), scheduler_(scheduler), hub_(hub) {}
+
+  grpc::Status SubmitJob(grpc::ServerContext* ctx, const v1::SubmitJobRequest* req,
+                         v1::SubmitJobResponse* resp) override;
+  grpc::Status GetJob(grpc::ServerContext* ctx, const v1::GetJobRequest* req,
+                      v1::JobInfo* resp) override;
+  grpc::Status ListJobs(grpc::ServerContext* ctx, const v1::ListJobsRequest* req,
+                        v1::ListJobsResponse* resp) override;
+  grpc::Status CancelJob(grpc::ServerContext* ctx, const v1::CancelJobRequest* req,
+                         v1::JobInfo* resp) override;
+  grpc::Status WatchJob(grpc::ServerContext* ctx, const v1::WatchJobRequest* req,
+                        grpc::ServerWriter<v1::JobEvent>* writer) override;
+
+ private:
+  // The caller, or UNAUTHENTICATED.
+  grpc::Status authenticate(const grpc::ServerContext* ctx, Identity& who) const;
+  // The job if it exists and the caller may see it; NOT_FOUND / PERMISSION_DENIED otherwise.
+  grpc::Status visible_job(const Identity& who, const std::string& id, JobRow& row);
+
+  DaemonConfig config_;
+  const TokenTable& tokens_;
+  JobStore& store_;
+  Scheduler& scheduler_;
+  const EventHub& hub_;
+};
+
+}  // namespace mdem::server

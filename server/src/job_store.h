@@ -1,0 +1,91 @@
+#pragma once
+// The daemon's single source of truth (service.md "Durability"): one SQLite database in WAL mode
+// holding every job, its state and its sequenced event log. Every change of state is written in
+// the same transaction as the event that announces it, so the log and the jobs table never
+// disagree, and reconcile() makes them consistent with "nothing is running" after a restart.
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "mdem/sqlite_db.h"
+#include "mdem/v1/service.pb.h"
+
+namespace mdem::server {
+
+// A per-user limit refused a submit; the message names the limit.
+struct LimitError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct JobRow {
+  std::string id, user, request_id, kind, name;
+  v1::JobSpec spec;  // finalized
+  v1::JobState state = v1::QUEUED;
+  std::string reason;
+  std::string created_at, started_at, finished_at;
+  long elements = 0, total_steps = 0, step = 0, last_seq = 0;
+  int threads = 1;  // fixed at submit: a resumed run must use the same count to be bit-identical
+  int resumes = 0;
+  long checkpoint_step = 0;  // 0: no checkpoint
+  double wall_s = 0;         // compute time up to the checkpoint
+  long last_frame_step = -1, last_snapshot_step = -1, last_progress_step = -1;
+  bool columns_logged = false;
+  std::string report_json;
+
+  bool finished() const {
+    return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED;
+  }
+  v1::JobInfo info() const;
+};
+
+struct SubmitResult {
+  JobRow job;
+  bool created = false;
+};
+
+class JobStore {
+ public:
+  // Opens or creates the database (synchronous=FULL: an accepted job survives power loss too).
+  // Throws SqliteError naming the file.
+  explicit JobStore(const std::string& path);
+
+  // Queues a job, or returns the one this (user, request_id) created before. Throws LimitError
+  // when the user already has max_active queued or running jobs.
+  SubmitResult submit(const std::string& user, const std::string& request_id,
+                      const v1::JobSpec& spec, const std::string& kind, long elements,
+                      long total_steps, int threads, long max_active);
+  std::optional<JobRow> get(const std::string& id);
+  // Newest first; user empty = everyone's.
+  std::vector<JobRow> list(const std::string& user, int limit);
+
+  // After a restart: every RUNNING job goes back to QUEUED (a state event says from which
+  // checkpoint it will resume). Returns their ids.
+  std::vector<std::string> reconcile();
+  // The next job to run, marked RUNNING: among queued jobs, those of the user with the fewest
+  // running jobs, ties to the user who least recently started one, then the oldest job.
+  std::optional<JobRow> claim_next();
+  // Cancels a job that is still queued; false when it is not queued.
+  bool cancel_queued(const std::string& id, const std::string& reason);
+
+  // Appends events in one transaction and returns the last sequence number. A StateChange also
+  // sets the job's state and reason (and started/finished times), a FinalReport its report, and
+  // frames, snapshots, progress and columns advance what the job has logged.
+  long append(const std::string& job_id, std::vector<v1::JobEvent> events);
+  // Events with seq >= from_seq, in order: at most max_count, and stopping once max_bytes is
+  // exceeded (at least one event is returned when any exists).
+  std::vector<v1::JobEvent> events(const std::string& job_id, long from_seq, int max_count,
+                                   std::size_t max_bytes);
+  // Records that a checkpoint of the job at `step` is on disk.
+  void set_checkpoint(const std::string& job_id, long step, double wall_s);
+  long count(v1::JobState state);
+
+  static std::string now();  // ISO 8601 UTC with milliseconds
+
+ private:
+  std::optional<JobRow> get_locked(const std::string& id);
+  long append_locked(const std::string& job_id, std::vector<v1::JobEvent>& events);
+  SqliteDb db_;
+};
+
+}  // namespace mdem::server

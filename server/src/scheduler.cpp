@@ -1,0 +1,259 @@
+#include "scheduler.h"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <filesystem>
+
+#include "checkpoint_file.h"
+#include "mdem/snapshot_proto.h"
+#include "mdem/spec_job.h"
+
+namespace mdem::server {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr std::size_t kChunkBytes = 1 << 20;  // snapshot pieces, well under gRPC's 4 MiB limit
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+v1::JobEvent state_event(v1::JobState s, const std::string& reason) {
+  v1::JobEvent e;
+  e.mutable_state()->set_state(s);
+  e.mutable_state()->set_reason(reason);
+  return e;
+}
+
+v1::JobEvent report_event(const std::string& json) {
+  v1::JobEvent e;
+  e.mutable_report()->set_json(json);
+  return e;
+}
+
+std::vector<v1::JobEvent> snapshot_events(const Snapshot& s) {
+  std::string bytes;
+  snapshot_to_proto(s).SerializeToString(&bytes);
+  const std::size_t count =
+      std::max<std::size_t>(1, (bytes.size() + kChunkBytes - 1) / kChunkBytes);
+  std::vector<v1::JobEvent> out;
+  for (std::size_t k = 0; k < count; ++k) {
+    v1::JobEvent e;
+    v1::SnapshotChunk* c = e.mutable_snapshot();
+    c->set_step(s.step);
+    c->set_time_ps(s.time_ps);
+    c->set_index(static_cast<int>(k));
+    c->set_count(static_cast<int>(count));
+    c->set_data(bytes.substr(k * kChunkBytes, kChunkBytes));
+    out.push_back(std::move(e));
+  }
+  return out;
+}
+
+const char* state_name(v1::JobState s) { return v1::JobState_Name(s).c_str(); }
+
+}  // namespace
+
+Scheduler::Scheduler(const DaemonConfig& config, JobStore& store, EventWriter& writer)
+    : config_(config), store_(store), writer_(writer) {}
+
+Scheduler::~Scheduler() {
+  {
+    std::lock_guard lock(mu_);
+    stopping_ = true;
+  }
+  cv_.notify_all();
+  for (auto& t : workers_)
+    if (t.joinable()) t.join();
+}
+
+std::string Scheduler::checkpoint_path(const std::string& job_id) const {
+  return (std::filesystem::path(config_.data_dir) / "checkpoints" / (job_id + ".ckpt")).string();
+}
+
+void Scheduler::start() {
+  for (int i = 0; i < config_.workers; ++i) workers_.emplace_back([this] { worker(); });
+}
+
+void Scheduler::wake() { cv_.notify_all(); }
+
+bool Scheduler::cancel(const std::string& job_id, const std::string& reason) {
+  std::lock_guard lock(mu_);
+  auto it = running_.find(job_id);
+  if (it != running_.end()) {
+    it->second->reason = reason;
+    it->second->stop = kCancel;
+    return true;
+  }
+  return store_.cancel_queued(job_id, reason);
+}
+
+void Scheduler::drain() {
+  std::unique_lock lock(mu_);
+  stopping_ = true;
+  for (auto& [id, ctl] : running_) {
+    ctl->reason = "the daemon is stopping";
+    ctl->stop = kDrain;
+  }
+  cv_.notify_all();
+  const auto deadline = Clock::now() + std::chrono::duration<double>(config_.drain_timeout_s);
+  cv_.wait_until(lock, deadline, [&] { return active_workers_ == 0; });
+  if (active_workers_ > 0)
+    spdlog::warn("event=drain_timeout running={} note=\"requeued at next start\"", active_workers_);
+  lock.unlock();
+  for (auto& t : workers_)
+    if (active_workers_ == 0 && t.joinable())
+      t.join();
+    else
+      t.detach();
+}
+
+void Scheduler::worker() {
+  std::unique_lock lock(mu_);
+  while (!stopping_) {
+    std::optional<JobRow> row;
+    try {
+      row = store_.claim_next();
+    } catch (const std::exception& e) {
+      spdlog::error("event=claim_failed error=\"{}\"", e.what());
+    }
+    if (!row) {
+      cv_.wait_for(lock, std::chrono::seconds(1));
+      continue;
+    }
+    auto ctl = std::make_shared<Control>();
+    running_[row->id] = ctl;
+    ++active_workers_;
+    lock.unlock();
+    run(*row, *ctl);
+    lock.lock();
+    running_.erase(row->id);
+    --active_workers_;
+    cv_.notify_all();
+  }
+}
+
+void Scheduler::run(const JobRow& row, Control& ctl) {
+  spdlog::info("event=job_start job={} user={} kind={} elements={} threads={} resume_step={}",
+               row.id, row.user, row.kind, row.elements, row.threads, row.checkpoint_step);
+  auto ch = writer_.open(row.id);
+  const std::string ckpt = checkpoint_path(row.id);
+  const auto t0 = Clock::now();
+  double wall_before = row.wall_s;
+  std::unique_ptr<Job> job;
+  std::string state = "SUCCEEDED", reason;
+  try {
+    job = make_spec_job(row.spec, row.threads);
+    if (row.checkpoint_step > 0) try {
+        const CheckpointData data = read_checkpoint(ckpt);
+        load_checkpoint(*job, data.state);
+      } catch (const std::exception& e) {
+        job.reset();  // a fresh scene is no report of this job
+        throw CheckpointFileError(std::string("cannot resume: ") + e.what() +
+                                  "; the events logged up to step " + std::to_string(row.step) +
+                                  " are kept; submit the spec again to rerun the job");
+      }
+    if (!row.columns_logged) {
+      v1::JobEvent e;
+      for (const std::string& c : job->columns()) e.mutable_columns()->add_names(c);
+      ch->push(std::move(e));
+    }
+    auto last_ckpt = Clock::now();
+    auto save = [&](long step) {
+      ch->flush();  // the log reaches at least `step` before the checkpoint claims it
+      const double wall = wall_before + seconds_since(t0);
+      write_checkpoint(ckpt, {step, save_checkpoint(*job)});
+      store_.set_checkpoint(row.id, step, wall);
+      last_ckpt = Clock::now();
+      return step;
+    };
+    JobObserver obs;
+    obs.frame = [&](const SeriesFrame& f) {
+      if (f.step <= row.last_frame_step) return;  // logged before the restart
+      v1::JobEvent e;
+      e.mutable_frame()->set_step(f.step);
+      e.mutable_frame()->set_time_ps(f.time_ps);
+      e.mutable_frame()->mutable_values()->Add(f.values.begin(), f.values.end());
+      ch->push_droppable({std::move(e)}, f.step, false);
+    };
+    obs.snapshot = [&](const Snapshot& s) {
+      if (s.step <= row.last_snapshot_step) return;
+      ch->push_droppable(snapshot_events(s), s.step, true);
+    };
+    obs.progress = [&](const JobProgress& p) {
+      if (p.step <= row.last_progress_step) return;
+      v1::JobEvent e;
+      e.mutable_progress()->set_step(p.step);
+      e.mutable_progress()->set_total_steps(p.total_steps);
+      e.mutable_progress()->set_time_ps(p.time_ps);
+      e.mutable_progress()->set_phase(p.phase);
+      ch->push_droppable({std::move(e)}, p.step, false);
+    };
+    obs.cancelled = [&] { return ctl.stop.load() != kRun; };
+    obs.checkpoint = [&](long step) {
+      if (seconds_since(last_ckpt) < config_.checkpoint_every_s) return;
+      try {
+        save(step);
+      } catch (const CheckpointFileError& e) {
+        // The job goes on; a restart would resume from the previous checkpoint.
+        v1::JobEvent l;
+        l.mutable_log()->set_level("warning");
+        l.mutable_log()->set_text(std::string(e.what()) +
+                                  "; the job continues, a restart resumes from the last good "
+                                  "checkpoint");
+        ch->push(std::move(l));
+        spdlog::warn("event=checkpoint_failed job={} error=\"{}\"", row.id, e.what());
+        last_ckpt = Clock::now();
+      }
+    };
+    const JobRunResult r = run_job(*job, job_cadence(row.spec), obs);
+    if (r.cancelled && ctl.stop == kDrain) {
+      const long step = save(job->system().steps());
+      ch->push(state_event(v1::QUEUED, "requeued: " + ctl.reason +
+                                           "; resumes from the checkpoint at step " +
+                                           std::to_string(step)));
+      ch->flush();
+      writer_.close(row.id);
+      spdlog::info("event=job_requeued job={} step={}", row.id, step);
+      return;
+    }
+    if (r.cancelled) {
+      state = "CANCELLED";
+      reason = ctl.reason + "; results up to step " + std::to_string(job->system().steps()) +
+               " (t = " + std::to_string(job->system().time()) + " ps) are kept";
+    }
+  } catch (const NumericalError& e) {
+    state = "FAILED";
+    reason = e.what();
+  } catch (const CheckpointFileError& e) {
+    state = "FAILED";
+    reason = e.what();
+  } catch (const SqliteError& e) {
+    // The log cannot be written: leave the job RUNNING in the database; reconcile requeues it.
+    spdlog::error("event=job_log_failed job={} error=\"{}\"", row.id, e.what());
+    writer_.close(row.id);
+    return;
+  } catch (const std::exception& e) {
+    state = "FAILED";
+    reason = std::string("internal error: ") + e.what();
+  }
+  const double wall = wall_before + seconds_since(t0);
+  try {
+    if (job) ch->push(report_event(job_report(*job, row.id, state, reason, wall).dump()));
+    v1::JobState s = state == "SUCCEEDED"   ? v1::SUCCEEDED
+                     : state == "CANCELLED" ? v1::CANCELLED
+                                            : v1::FAILED;
+    ch->push(state_event(s, reason));
+    ch->flush();
+    std::error_code ec;
+    std::filesystem::remove(ckpt, ec);
+    spdlog::info("event=job_end job={} state={} wall_s={:.3f} reason=\"{}\"", row.id, state_name(s),
+                 wall, reason);
+  } catch (const std::exception& e) {
+    spdlog::error("event=job_log_failed job={} error=\"{}\"", row.id, e.what());
+  }
+  writer_.close(row.id);
+}
+
+}  // namespace mdem::server

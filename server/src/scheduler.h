@@ -1,0 +1,59 @@
+#pragma once
+// The worker pool (service.md "Sharing a queue"): N worker threads, each taking the next job the
+// store's fair order gives and running it on the engine with the job's fixed thread count, its
+// events going through an EventChannel, its state checkpointed at a wall-clock cadence. Cancel
+// and drain reach a running job between chunks of steps (well under a second).
+#include <atomic>
+#include <condition_variable>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "config.h"
+#include "event_writer.h"
+#include "job_store.h"
+
+namespace mdem::server {
+
+class Scheduler {
+ public:
+  Scheduler(const DaemonConfig& config, JobStore& store, EventWriter& writer);
+  ~Scheduler();
+  Scheduler(const Scheduler&) = delete;
+  Scheduler& operator=(const Scheduler&) = delete;
+
+  void start();
+  // A job was queued: a free worker takes it.
+  void wake();
+  // Stops a queued or running job. Returns false when the job is neither.
+  bool cancel(const std::string& job_id, const std::string& reason);
+  // Stops taking jobs; running jobs checkpoint and go back to the queue; waits for the workers
+  // up to the drain timeout (a job still running then is requeued by reconcile at next start).
+  void drain();
+
+  std::string checkpoint_path(const std::string& job_id) const;
+
+ private:
+  enum Stop : int { kRun = 0, kCancel = 1, kDrain = 2 };
+  struct Control {
+    std::atomic<int> stop{kRun};
+    std::string reason;  // set before stop, read after
+  };
+  void worker();
+  void run(const JobRow& row, Control& ctl);
+
+  DaemonConfig config_;
+  JobStore& store_;
+  EventWriter& writer_;
+  std::mutex mu_;
+  std::condition_variable cv_;
+  bool stopping_ = false;
+  std::map<std::string, std::shared_ptr<Control>> running_;
+  std::vector<std::thread> workers_;
+  int active_workers_ = 0;
+};
+
+}  // namespace mdem::server

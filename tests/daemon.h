@@ -1,0 +1,160 @@
+#pragma once
+// Starts a real mdemd process for the service tests: a temp data directory, a token file with
+// users alice, bob and an admin root, port 0 (the daemon writes the bound port to a file), and
+// stubs that carry a user's token.
+#include <fcntl.h>
+#include <grpcpp/grpcpp.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "mdem/v1/service.grpc.pb.h"
+
+namespace mdem::testing {
+
+namespace fs = std::filesystem;
+
+inline const char* kAliceToken = "alice-token-0123456789";
+inline const char* kBobToken = "bob-token-0123456789ab";
+inline const char* kRootToken = "root-token-0123456789ab";
+
+inline fs::path fresh_dir(const std::string& name) {
+  const fs::path d =
+      fs::temp_directory_path() / ("mdemd-test-" + std::to_string(getpid()) + "-" + name);
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+class DaemonProcess {
+ public:
+  // dir: the test's directory (data/, tokens, log inside). extra: more mdemd flags.
+  explicit DaemonProcess(fs::path dir, std::vector<std::string> extra = {})
+      : dir_(std::move(dir)), extra_(std::move(extra)) {
+    std::ofstream(dir_ / "tokens") << "# test users\n"
+                                   << kAliceToken << " alice\n"
+                                   << kBobToken << " bob\n"
+                                   << kRootToken << " root admin\n";
+    start();
+  }
+  ~DaemonProcess() {
+    if (pid_ > 0) {
+      ::kill(pid_, SIGKILL);
+      ::waitpid(pid_, nullptr, 0);
+    }
+  }
+
+  // Starts (or restarts) the daemon on the same data directory; waits until it serves.
+  void start() {
+    const fs::path port_file = dir_ / "port";
+    fs::remove(port_file);
+    std::vector<std::string> args = {MDEMD_PATH,
+                                     "--listen",
+                                     "127.0.0.1:0",
+                                     "--data-dir",
+                                     (dir_ / "data").string(),
+                                     "--token-file",
+                                     (dir_ / "tokens").string(),
+                                     "--port-file",
+                                     port_file.string()};
+    args.insert(args.end(), extra_.begin(), extra_.end());
+    pid_ = spawn(args, dir_ / "mdemd.log");
+    for (int i = 0; i < 400 && !fs::exists(port_file); ++i) {
+      int status = 0;
+      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        throw std::runtime_error("mdemd exited at start:\n" + log());
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    std::ifstream(port_file) >> port_;
+    if (port_ <= 0) throw std::runtime_error("mdemd did not write its port:\n" + log());
+    channel_ = grpc::CreateChannel("127.0.0.1:" + std::to_string(port_),
+                                   grpc::InsecureChannelCredentials());
+  }
+  void kill9() {
+    ::kill(pid_, SIGKILL);
+    ::waitpid(pid_, nullptr, 0);
+    pid_ = -1;
+  }
+  // SIGTERM; returns the exit status (or -1 when it had to be killed after timeout_s).
+  int terminate(double timeout_s = 30) {
+    ::kill(pid_, SIGTERM);
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    int status = 0;
+    while (std::chrono::steady_clock::now() < end) {
+      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    kill9();
+    return -1;
+  }
+
+  int pid() const { return pid_; }
+  int port() const { return port_; }
+  std::string address() const { return "127.0.0.1:" + std::to_string(port_); }
+  fs::path data_dir() const { return dir_ / "data"; }
+  std::string log() const {
+    std::ifstream in(dir_ / "mdemd.log");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  }
+  std::shared_ptr<grpc::Channel> channel() const { return channel_; }
+  std::unique_ptr<v1::JobService::Stub> stub() const { return v1::JobService::NewStub(channel_); }
+  // Resident memory of the daemon (kB), from /proc.
+  long rss_kb() const {
+    std::ifstream in("/proc/" + std::to_string(pid_) + "/status");
+    std::string line;
+    while (std::getline(in, line))
+      if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
+    return -1;
+  }
+
+  // Runs a program with stdout+stderr to `log`; returns its pid.
+  static int spawn(const std::vector<std::string>& args, const fs::path& log) {
+    const int pid = ::fork();
+    if (pid == 0) {
+      const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+      ::dup2(fd, 1);
+      ::dup2(fd, 2);
+      std::vector<char*> argv;
+      for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+      argv.push_back(nullptr);
+      ::execv(argv[0], argv.data());
+      ::_exit(127);
+    }
+    return pid;
+  }
+
+ private:
+  fs::path dir_;
+  std::vector<std::string> extra_;
+  int pid_ = -1, port_ = 0;
+  std::shared_ptr<grpc::Channel> channel_;
+};
+
+// A client context carrying a user's token and a deadline.
+inline std::unique_ptr<grpc::ClientContext> ctx_for(const char* token, double deadline_s = 30) {
+  auto c = std::make_unique<grpc::ClientContext>();
+  if (token) c->AddMetadata("authorization", std::string("Bearer ") + token);
+  if (deadline_s > 0)
+    c->set_deadline(std::chrono::system_clock::now() +
+                    std::chrono::milliseconds(static_cast<long>(deadline_s * 1000)));
+  return c;
+}
+
+}  // namespace mdem::testing
