@@ -188,13 +188,24 @@ const std::vector<std::string> kColumns = {"kinetic_eV", "potential_eV", "total_
 
 class ExportTest : public ::testing::Test {
  protected:
+  static JobRecord record(const char* id, const char* kind, const char* spec, const char* state,
+                          const char* reason, const char* created) {
+    JobRecord r;
+    r.id = id;
+    r.kind = kind;
+    r.spec_json = spec;
+    r.state = state;
+    r.reason = reason;
+    r.created_at = created;
+    return r;
+  }
   void SetUp() override {
     std::string tmpl = (fs::temp_directory_path() / "mdem-export-test-XXXXXX").string();
     dir_ = mkdtemp(tmpl.data());
     db_ = file("results.db");
     ResultsStore store(db_);
-    store.create_job({kJob, "twist", R"({"name":"demo rope","tubes":3})", "RUNNING", "", "",
-                      "2026-01-02T03:04:05Z", ""});
+    store.create_job(record(kJob, "twist", R"({"name":"demo rope","tubes":3})", "RUNNING", "",
+                            "2026-01-02T03:04:05Z"));
     store.set_columns(kJob, kColumns);
     std::mt19937_64 rng(3);
     std::normal_distribution<double> g(0, 1);
@@ -210,7 +221,7 @@ class ExportTest : public ::testing::Test {
     store.finish_job(kJob, "SUCCEEDED", "",
                      R"({"job":"twist","state":"SUCCEEDED","summary":{"morphology":"helical"}})");
     store.create_job(
-        {kOtherJob, "bundle", "{}", "FAILED", "blew up at step 3", "", "2026-01-02T03:04:06Z", ""});
+        record(kOtherJob, "bundle", "{}", "FAILED", "blew up at step 3", "2026-01-02T03:04:06Z"));
     std::ofstream(file("reader.py")) << kReader;
   }
   void TearDown() override {

@@ -20,17 +20,34 @@ void print_usage(std::ostream& os) {
         "Usage: mdem <command> [flags]\n"
         "\n"
         "Commands:\n"
-        "  run <kind>   run a job in this process (e.g. `mdem run bundle`)\n"
-        "  probe        evaluate one contact model for two elements and print JSON\n"
-        "  ls           list the jobs in the local results database\n"
-        "  show ID      show one job: state, spec, summary, frame and snapshot counts\n"
-        "  export ID    write a job's results as extended XYZ (OVITO), VTK (ParaView) or CSV\n"
-        "  plot ID      draw a job's time series to a .png or .svg with gnuplot\n"
-        "  help [cmd]   show this help, or the help of one command\n"
+        "  run <kind>     run a job in this process (e.g. `mdem run twist`, `mdem run bundle`)\n"
+        "  submit <kind>  queue a job on the mdemd daemon (same flags as run; --watch follows it)\n"
+        "  watch ID       follow a daemon's job, storing its results in the local database\n"
+        "  cancel ID      cancel a daemon's job (what it produced is kept)\n"
+        "  ls             list the jobs in the local results database (--server: on the daemon)\n"
+        "  show ID        show one job: state, spec, summary, frame and snapshot counts\n"
+        "                 (--server: the daemon's view)\n"
+        "  export ID      write a job's results as extended XYZ (OVITO), VTK (ParaView) or CSV\n"
+        "  plot ID        draw a job's time series to a .png or .svg with gnuplot\n"
+        "  probe          evaluate one contact model for two elements and print JSON\n"
+        "  help [cmd]     show this help, or the help of one command\n"
         "\n"
         "Flags:\n"
-        "  -h, --help   show this help\n"
-        "  --version    print the version\n"
+        "  -h, --help     show this help\n"
+        "  --version      print the version\n"
+        "\n"
+        "The daemon: --server HOST:PORT, else $MDEM_SERVER, else `server:` in the config file\n"
+        "($MDEM_CONFIG, else $XDG_CONFIG_HOME/mdem/config.yaml, else ~/.config/mdem/config.yaml,\n"
+        "with keys server, token_file, tls, ca_file); the token from --token-file FILE, else\n"
+        "$MDEM_TOKEN, else `token_file:`. submit, watch and cancel use the config file's server;\n"
+        "ls and show ask the daemon only with --server or $MDEM_SERVER. Results of every job,\n"
+        "run here or on the daemon, go to one local database (--db PATH, else $MDEM_DB, else\n"
+        "~/.local/share/mdem/results.db), so export and plot work alike on both.\n"
+        "\n"
+        "Exit codes: 0 success; 1 the job failed or was cancelled (also: the daemon refused the\n"
+        "token or the permission, no such job, a per-user limit); 2 usage error (bad flag, spec,\n"
+        "config or token file); 3 the daemon could not be reached or did not answer (130: a\n"
+        "watch stopped by Ctrl-C).\n"
         "\n"
         "Run `mdem <command> --help` for the flags of a command.\n";
 }
@@ -44,6 +61,9 @@ int dispatch(const std::vector<std::string>& argv_tail, std::ostream& out, std::
   const std::vector<std::string> rest(argv_tail.begin() + 1, argv_tail.end());
   if (cmd == "probe") return probe(rest, out, err);
   if (cmd == "run") return run(rest, out, err);
+  if (cmd == "submit") return submit(rest, out, err);
+  if (cmd == "watch") return watch(rest, out, err);
+  if (cmd == "cancel") return cancel(rest, out, err);
   if (cmd == "ls") return ls(rest, out, err);
   if (cmd == "show") return show(rest, out, err);
   if (cmd == "export") return export_job(rest, out, err);
@@ -59,6 +79,9 @@ int dispatch(const std::vector<std::string>& argv_tail, std::ostream& out, std::
     }
     if (rest.front() == "probe") return probe({"--help"}, out, err);
     if (rest.front() == "run") return run({"--help"}, out, err);
+    if (rest.front() == "submit") return submit({"--help"}, out, err);
+    if (rest.front() == "watch") return watch({"--help"}, out, err);
+    if (rest.front() == "cancel") return cancel({"--help"}, out, err);
     if (rest.front() == "ls") return ls({"--help"}, out, err);
     if (rest.front() == "show") return show({"--help"}, out, err);
     if (rest.front() == "export") return export_job({"--help"}, out, err);

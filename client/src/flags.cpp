@@ -136,6 +136,35 @@ std::vector<double> parse_list(const std::string& flag, const std::string& text,
   return values;
 }
 
+namespace {
+
+bool takes_value(const FlagSpec& spec, const std::string& arg) {
+  return arg.find('=') == std::string::npos &&
+         std::find(spec.with_value.begin(), spec.with_value.end(), arg) != spec.with_value.end();
+}
+
+}  // namespace
+
+std::pair<std::string, std::map<std::string, std::string>> parse_id_and_flags(
+    const std::vector<std::string>& args, const FlagSpec& spec) {
+  std::vector<std::string> ids, rest;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a.size() > 1 && a.front() == '-') {
+      rest.push_back(a);
+      if (takes_value(spec, a) && i + 1 < args.size() && args[i + 1].rfind("--", 0) != 0)
+        rest.push_back(args[++i]);
+    } else {
+      ids.push_back(a);
+    }
+  }
+  auto given = parse_flags(rest, spec);
+  if (ids.empty()) throw UsageError("missing the job ID (see `mdem ls`)");
+  if (ids.size() > 1) throw UsageError("unexpected argument '" + ids[1] + "' (give one job ID)");
+  if (ids.front().empty()) throw UsageError("the job ID is empty");
+  return {ids.front(), std::move(given)};
+}
+
 void write_json(std::ostream& os, const json& j, int indent) {
   if (!j.is_object()) {
     os << j.dump();

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace mdem::cli {
@@ -28,6 +29,12 @@ struct FlagSpec {
 // with "--" is a missing value; a negative number ("-1,0,0") is a value.
 std::map<std::string, std::string> parse_flags(const std::vector<std::string>& args,
                                                const FlagSpec& spec);
+
+// Parses the flags and the job ID: the one argument that is neither a flag nor a flag's value.
+// Flag errors come first, so `--bogus 1` is reported as an unknown flag, not as a second ID.
+// UsageError for a missing, empty or second ID.
+std::pair<std::string, std::map<std::string, std::string>> parse_id_and_flags(
+    const std::vector<std::string>& args, const FlagSpec& spec);
 
 // One finite number; `expected` says what is allowed, for the error message.
 double parse_number(const std::string& flag, std::string_view text, const char* expected);

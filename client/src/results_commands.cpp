@@ -8,6 +8,8 @@
 #include "flags.h"
 #include "mdem/cli.h"
 #include "plot.h"
+#include "remote.h"
+#include "remote_commands.h"
 #include "results_store.h"
 
 namespace mdem::cli {
@@ -25,21 +27,37 @@ constexpr const char* kExitHelp =
     "Exit codes: 0 success, 1 no such job or the database/output cannot be read or written,\n"
     "2 usage error.\n";
 
+constexpr const char* kRemoteHelp =
+    "With --server HOST:PORT (or $MDEM_SERVER set) the daemon is asked instead of the local\n"
+    "database (the config file's server is not enough: `mdem ls` stays local without them);\n"
+    "--local (or --db) reads the local database even then. On a daemon:\n";
+
+constexpr const char* kRemoteExitHelp =
+    "Exit codes: 0 success, 1 no such job (or not yours, or the token was refused) or the\n"
+    "database/output cannot be read or written, 2 usage error (also a bad config or token\n"
+    "file), 3 the daemon could not be reached or did not answer.\n";
+
 void print_ls_help(std::ostream& os) {
   os << "Usage: mdem ls [--db PATH] [--json]\n"
+        "       mdem ls --server HOST:PORT [--all] [--limit N] [--json] [connection flags]\n"
         "\n"
         "Lists the jobs of the local results database, newest first: id, kind, state, creation\n"
         "time (UTC) and highlights of the spec and summary (name, morphology, element count, why\n"
-        "a job failed).\n"
+        "a job failed). Jobs submitted to a daemon are there too, with what `mdem watch` stored.\n"
         "\n"
         "Flags:\n"
         "  --json          print a JSON array of the jobs (spec and summary as JSON)\n"
-     << kDbFlagHelp << "\n"
-     << kExitHelp;
+     << kDbFlagHelp << "  --local         the local database even with $MDEM_SERVER set\n\n"
+     << kRemoteHelp
+     << "  --all           every user's jobs (an admin's token only) with a USER column\n"
+        "  --limit N       at most N jobs, 1..1000 (default: the daemon's, 100)\n"
+     << kConnectionHelp << "\n"
+     << kRemoteExitHelp;
 }
 
 void print_show_help(std::ostream& os) {
   os << "Usage: mdem show ID [--db PATH] [--json]\n"
+        "       mdem show ID --server HOST:PORT [--json] [connection flags]\n"
         "\n"
         "Prints one job: kind, state (and why it failed), creation and finish times, the numbers\n"
         "of frames (with the series' columns) and snapshots, and the spec and summary JSON.\n"
@@ -47,8 +65,12 @@ void print_show_help(std::ostream& os) {
      << "\n"
         "Flags:\n"
         "  --json          print one JSON object\n"
-     << kDbFlagHelp << "\n"
-     << kExitHelp;
+     << kDbFlagHelp << "  --local         the local database even with $MDEM_SERVER set\n\n"
+     << kRemoteHelp
+     << "the daemon's view of the job (user, state, progress, spec, report); ID is passed as\n"
+        "given.\n"
+     << kConnectionHelp << "\n"
+     << kRemoteExitHelp;
 }
 
 void print_export_help(std::ostream& os) {
@@ -117,37 +139,13 @@ int guarded(const std::string& cmd, std::ostream& err, Body&& body) {
   } catch (const NoSuchJob& e) {
     err << "mdem " << cmd << ": " << e.what() << "\n";
     return kJobFailed;
+  } catch (const RemoteError& e) {
+    err << "mdem " << cmd << ": " << e.what() << "\n";
+    return e.exit_code;
   } catch (const std::exception& e) {
     err << "mdem " << cmd << ": error: " << e.what() << "\n";
     return kJobFailed;
   }
-}
-
-bool takes_value(const FlagSpec& spec, const std::string& arg) {
-  return arg.find('=') == std::string::npos &&
-         std::find(spec.with_value.begin(), spec.with_value.end(), arg) != spec.with_value.end();
-}
-
-// Parses the flags and the job ID: the one argument that is neither a flag nor a flag's value.
-// Flag errors come first, so `--bogus 1` is reported as an unknown flag, not as a second ID.
-std::pair<std::string, std::map<std::string, std::string>> parse_id_and_flags(
-    const std::vector<std::string>& args, const FlagSpec& spec) {
-  std::vector<std::string> ids, rest;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a.size() > 1 && a.front() == '-') {
-      rest.push_back(a);
-      if (takes_value(spec, a) && i + 1 < args.size() && args[i + 1].rfind("--", 0) != 0)
-        rest.push_back(args[++i]);
-    } else {
-      ids.push_back(a);
-    }
-  }
-  auto given = parse_flags(rest, spec);
-  if (ids.empty()) throw UsageError("missing the job ID (see `mdem ls`)");
-  if (ids.size() > 1) throw UsageError("unexpected argument '" + ids[1] + "' (give one job ID)");
-  if (ids.front().empty()) throw UsageError("the job ID is empty");
-  return {ids.front(), std::move(given)};
 }
 
 std::string db_path(const std::map<std::string, std::string>& given) {
@@ -227,8 +225,31 @@ void print_table(std::ostream& os, const std::vector<std::vector<std::string>>& 
   }
 }
 
+// Whether ls/show ask the daemon: --server, or $MDEM_SERVER without --local or --db. The flags only
+// the daemon understands are refused locally.
+bool ask_daemon(const std::map<std::string, std::string>& given) {
+  if (given.count("--local")) {
+    for (const char* f : {"--server", "--token-file", "--tls", "--ca-file", "--all", "--limit"})
+      if (given.count(f)) throw UsageError(std::string(f) + ": not with --local");
+    return false;
+  }
+  if (given.count("--server")) {
+    if (given.count("--db")) throw UsageError("--db: the local database is not read with --server");
+    return true;
+  }
+  // $MDEM_SERVER alone: the daemon, unless --db asks for a local database.
+  if (server_named(given, process_env()) && !given.count("--db")) return true;
+  for (const char* f : {"--token-file", "--tls", "--ca-file", "--all", "--limit"})
+    if (given.count(f))
+      throw UsageError(std::string(f) + ": only with --server HOST:PORT (or $MDEM_SERVER)");
+  return false;
+}
+
 int run_ls(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  auto given = parse_flags(args, {{"--db"}, {"--json"}});
+  FlagSpec spec{{"--db", "--limit"}, {"--json", "--all", "--local"}};
+  add_connection_flags(spec);
+  auto given = parse_flags(args, spec);
+  if (ask_daemon(given)) return remote_ls(given, out, err);
   const std::string path = db_path(given);
   std::vector<JobRecord> jobs;
   if (db_exists(path)) jobs = ResultsStore(path).list();
@@ -275,9 +296,11 @@ void print_job(std::ostream& os, const JobRecord& job, const std::vector<std::st
   print_document(os, "summary", job.summary_json);
 }
 
-int run_show(const std::vector<std::string>& args, std::ostream& out) {
-  const FlagSpec spec{{"--db"}, {"--json"}};
+int run_show(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  FlagSpec spec{{"--db"}, {"--json", "--local"}};
+  add_connection_flags(spec);
   auto [id, given] = parse_id_and_flags(args, spec);
+  if (ask_daemon(given)) return remote_show(id, given, out, err);
   const auto store = open_store(db_path(given), id);
   const JobRecord job = resolve(*store, id);
   const std::vector<std::string> columns = store->columns(job.id);
@@ -359,7 +382,7 @@ int show(const std::vector<std::string>& args, std::ostream& out, std::ostream& 
     print_show_help(out);
     return kOk;
   }
-  return guarded("show", err, [&] { return run_show(args, out); });
+  return guarded("show", err, [&] { return run_show(args, out, err); });
 }
 
 int export_job(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {

@@ -41,7 +41,9 @@ CREATE TABLE jobs (
   summary_json TEXT NOT NULL DEFAULT '',
   created_at TEXT NOT NULL,
   finished_at TEXT NOT NULL DEFAULT '',
-  columns_json TEXT NOT NULL DEFAULT '[]'
+  columns_json TEXT NOT NULL DEFAULT '[]',
+  server TEXT NOT NULL DEFAULT '',
+  last_seq INTEGER NOT NULL DEFAULT 0
 );
 CREATE TABLE frames (
   job_id TEXT NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,
@@ -68,6 +70,9 @@ CREATE TABLE snapshots (
   UNIQUE (job_id, seq)
 );
 )sql";
+// jobs.server and jobs.last_seq (a daemon's job: where it runs, the last event applied) came
+// after version 1 was released: an older file gets them by ALTER TABLE when opened (kMigrations),
+// so the version stays 1 and an older mdem still reads the file.
 // frames.vals: float64 per column. snapshots: x = float64 x,y,z per element; q = float64
 // w,x,y,z; radius float64; kind, tube, idx int32; scalar_names a JSON array; scalars float64,
 // n values per name in the order of the names.
@@ -75,7 +80,22 @@ CREATE TABLE snapshots (
 const std::set<std::string> kStates = {"QUEUED", "RUNNING", "SUCCEEDED", "FAILED", "CANCELLED"};
 
 constexpr const char* kJobColumns =
+    "id, kind, spec_json, state, reason, summary_json, created_at, finished_at, server, last_seq";
+// The same for a read-only file of the first schema, which lacks server and last_seq.
+constexpr const char* kOldJobColumns =
+    "id, kind, spec_json, state, reason, summary_json, created_at, finished_at, '', 0";
+constexpr const char* kInsertJobColumns =
     "id, kind, spec_json, state, reason, summary_json, created_at, finished_at";
+
+// Columns added to the jobs table since the first schema: name and definition.
+constexpr std::pair<const char*, const char*> kMigrations[] = {
+    {"server", "server TEXT NOT NULL DEFAULT ''"},
+    {"last_seq", "last_seq INTEGER NOT NULL DEFAULT 0"},
+};
+
+bool is_final(const std::string& state) {
+  return state == "SUCCEEDED" || state == "FAILED" || state == "CANCELLED";
+}
 constexpr const char* kSnapshotColumns =
     "step, time_ps, n, x, q, radius, kind, tube, idx, scalar_names, scalars";
 
@@ -140,8 +160,16 @@ struct StoreDb {
   sqlite3* db = nullptr;
   std::map<std::string, sqlite3_stmt*> statements;  // prepared once, reset after each use
   std::mutex mu;                                    // one call at a time per store
+  bool remote_columns = true;  // jobs has server and last_seq (false: an old read-only file)
 
   explicit StoreDb(std::string p) : path(std::move(p)) {}
+  std::string job_columns() const { return remote_columns ? kJobColumns : kOldJobColumns; }
+  void require_remote_columns() const {
+    if (!remote_columns)
+      throw StoreError(where() +
+                       ": read-only and of an older schema (no server/last_seq columns); open it "
+                       "writable once to upgrade it");
+  }
   ~StoreDb() {
     for (auto& [sql, s] : statements) sqlite3_finalize(s);
     if (db) sqlite3_close_v2(db);
@@ -287,12 +315,47 @@ void check_schema_version(Impl& db) {
                      (v > kSchemaVersion ? " (written by a newer mdem)" : ""));
 }
 
-// Checks the schema of an existing database (reading only, so a read-only file can be listed),
-// or creates it in a new one.
-void ensure_schema(Impl& db) {
-  if (has_table(db, "schema_version")) return check_schema_version(db);
+bool has_column(Impl& db, const char* table, const char* column) {
+  Query q(db, "SELECT 1 FROM pragma_table_info(?) WHERE name = ?", "cannot read the schema");
+  q.bind(1, std::string(table)).bind(2, std::string(column));
+  return q.step();
+}
+
+bool needs_migration(Impl& db) {
+  for (const auto& [column, definition] : kMigrations)
+    if (!has_column(db, "jobs", column)) return true;
+  return false;
+}
+
+// Adds the columns of kMigrations that a file of an older mdem lacks. A read-only file is left
+// as it is (and read with defaults for the missing columns).
+void migrate(Impl& db) {
+  if (!needs_migration(db)) return;
+  if (sqlite3_db_readonly(db.db, "main") == 1) {
+    db.remote_columns = false;
+    return;
+  }
   Transaction t(db);
-  if (has_table(db, "schema_version")) return check_schema_version(db);  // created meanwhile
+  for (const auto& [column, definition] : kMigrations)
+    if (!has_column(db, "jobs", column))  // another process may have added it meanwhile
+      db.exec((std::string("ALTER TABLE jobs ADD COLUMN ") + definition).c_str(),
+              std::string("cannot add the column '") + column + "' to the jobs table");
+  t.commit();
+}
+
+// Checks the schema of an existing database (reading only, so a read-only file can be listed;
+// a writable file of an older schema is upgraded), or creates it in a new one.
+void ensure_schema(Impl& db) {
+  if (has_table(db, "schema_version")) {
+    check_schema_version(db);
+    return migrate(db);
+  }
+  Transaction t(db);
+  if (has_table(db, "schema_version")) {  // created meanwhile
+    check_schema_version(db);
+    t.commit();
+    return migrate(db);
+  }
   if (table_count(db) > 0)
     throw StoreError(db.where() + ": not an mdem results database (it has other tables)");
   db.exec(kSchema, "cannot create the schema");
@@ -361,8 +424,8 @@ void check_snapshot_values(const Impl& db, const Snapshot& s) {
 // ---- rows <-> records -------------------------------------------------------------------------
 
 JobRecord read_job(const Query& q) {
-  return JobRecord{q.text(0), q.text(1), q.text(2), q.text(3),
-                   q.text(4), q.text(5), q.text(6), q.text(7)};
+  return JobRecord{q.text(0), q.text(1), q.text(2), q.text(3), q.text(4),
+                   q.text(5), q.text(6), q.text(7), q.text(8), q.integer(9)};
 }
 
 std::vector<std::string> read_columns(Impl& db, const std::string& id) {
@@ -474,6 +537,74 @@ void bind_snapshot(Query& q, const Snapshot& s) {
   q.bind(12, names.dump()).bind_blob(13, scalars);
 }
 
+void check_state(const Impl& db, const std::string& id, const std::string& state) {
+  if (!kStates.count(state))
+    throw StoreError(db.where() + ": job '" + id + "': unknown state '" + state +
+                     "' (allowed: QUEUED, RUNNING, SUCCEEDED, FAILED, CANCELLED)");
+}
+
+// The writes below run inside the caller's transaction.
+
+void write_columns(Impl& db, const std::string& id, const std::vector<std::string>& columns) {
+  if (count_rows(db, "frames", id) > 0 && read_columns(db, id) != columns)
+    throw StoreError(db.where() + ": job '" + id +
+                     "': the columns cannot change after frames were written");
+  Query(db, "UPDATE jobs SET columns_json = ? WHERE id = ?", "cannot set the columns")
+      .bind(1, nlohmann::json(columns).dump())
+      .bind(2, id)
+      .run();
+}
+
+void write_frames(Impl& db, const std::string& id, const std::vector<SeriesFrame>& frames) {
+  if (frames.empty()) return;
+  const std::vector<std::string> columns = read_columns(db, id);
+  for (const SeriesFrame& f : frames) check_frame(db, f, columns, id);
+  long seq = next_seq(db, "frames", id);
+  for (const SeriesFrame& f : frames) {
+    Query q(db, "INSERT INTO frames (job_id, seq, step, time_ps, vals) VALUES (?, ?, ?, ?, ?)",
+            "cannot write a frame of job '" + id + "'");
+    q.bind(1, id).bind(2, seq++).bind(3, f.step).bind(4, f.time_ps).bind_blob(5, encode(f.values));
+    q.run();
+  }
+}
+
+// The snapshot was checked (check_snapshot_sizes, check_snapshot_values) before.
+void write_snapshot(Impl& db, const std::string& id, const Snapshot& snap) {
+  Query q(db,
+          std::string("INSERT INTO snapshots (job_id, seq, ") + kSnapshotColumns +
+              ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+          "cannot write a snapshot of job '" + id + "'");
+  q.bind(1, id).bind(2, next_seq(db, "snapshots", id));
+  bind_snapshot(q, snap);
+  q.run();
+}
+
+void write_state(Impl& db, const std::string& id, const std::string& state,
+                 const std::string& reason) {
+  Query q(db, "UPDATE jobs SET state = ?, reason = ? WHERE id = ?",
+          "cannot set the state of job '" + id + "'");
+  q.bind(1, state).bind(2, reason).bind(3, id);
+  q.run();
+}
+
+long read_last_seq(Impl& db, const std::string& id) {
+  Query q(
+      db,
+      std::string("SELECT ") + (db.remote_columns ? "last_seq" : "0") + " FROM jobs WHERE id = ?",
+      "cannot read the jobs");
+  q.bind(1, id);
+  if (!q.step()) throw StoreError(db.where() + ": no job '" + id + "'");
+  return q.integer(0);
+}
+
+void write_last_seq(Impl& db, const std::string& id, long seq) {
+  db.require_remote_columns();
+  Query q(db, "UPDATE jobs SET last_seq = ? WHERE id = ?",
+          "cannot record the last event of job '" + id + "'");
+  q.bind(1, seq).bind(2, id);
+  q.run();
+}
+
 }  // namespace
 
 struct ResultsStore::Impl : StoreDb {
@@ -517,12 +648,11 @@ std::string ResultsStore::new_job_id() {
 void ResultsStore::create_job(const JobRecord& job) {
   std::lock_guard lock(impl_->mu);
   if (job.id.empty()) throw StoreError(impl_->where() + ": a job needs an id");
-  if (!kStates.count(job.state))
-    throw StoreError(impl_->where() + ": job '" + job.id + "': unknown state '" + job.state +
-                     "' (allowed: QUEUED, RUNNING, SUCCEEDED, FAILED, CANCELLED)");
-  Query q(*impl_,
-          std::string("INSERT INTO jobs (") + kJobColumns + ") VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
-          "cannot create job '" + job.id + "'");
+  check_state(*impl_, job.id, job.state);
+  Query q(
+      *impl_,
+      std::string("INSERT INTO jobs (") + kInsertJobColumns + ") VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+      "cannot create job '" + job.id + "'");
   q.bind(1, job.id).bind(2, job.kind).bind(3, job.spec_json).bind(4, job.state);
   q.bind(5, job.reason).bind(6, job.summary_json);
   q.bind(7, job.created_at.empty() ? utc_now("%Y-%m-%dT%H:%M:%SZ") : job.created_at);
@@ -544,17 +674,89 @@ void ResultsStore::finish_job(const std::string& id, const std::string& state,
   if (sqlite3_changes(impl_->db) == 0) throw StoreError(impl_->where() + ": no job '" + id + "'");
 }
 
+void ResultsStore::set_state(const std::string& id, const std::string& state,
+                             const std::string& reason) {
+  std::lock_guard lock(impl_->mu);
+  check_state(*impl_, id, state);
+  Transaction t(*impl_);
+  require_job(*impl_, id);
+  write_state(*impl_, id, state, reason);
+  t.commit();
+}
+
+void ResultsStore::upsert_remote_job(const JobRecord& job) {
+  std::lock_guard lock(impl_->mu);
+  impl_->require_remote_columns();
+  if (job.id.empty()) throw StoreError(impl_->where() + ": a job needs an id");
+  if (job.server.empty())
+    throw StoreError(impl_->where() + ": job '" + job.id + "': a daemon's job needs its server");
+  check_state(*impl_, job.id, job.state);
+  Query q(*impl_,
+          std::string("INSERT INTO jobs (") + kJobColumns +
+              ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (id) DO UPDATE SET kind = "
+              "excluded.kind, spec_json = excluded.spec_json, server = excluded.server, "
+              "created_at = excluded.created_at",
+          "cannot record job '" + job.id + "'");
+  q.bind(1, job.id).bind(2, job.kind).bind(3, job.spec_json).bind(4, job.state);
+  q.bind(5, job.reason).bind(6, job.summary_json);
+  q.bind(7, job.created_at.empty() ? utc_now("%Y-%m-%dT%H:%M:%SZ") : job.created_at);
+  q.bind(8, job.finished_at).bind(9, job.server).bind(10, job.last_seq);
+  q.run();
+}
+
+long ResultsStore::last_seq(const std::string& id) const {
+  std::lock_guard lock(impl_->mu);
+  return read_last_seq(*impl_, id);
+}
+
+void ResultsStore::set_last_seq(const std::string& id, long seq) {
+  std::lock_guard lock(impl_->mu);
+  Transaction t(*impl_);
+  require_job(*impl_, id);
+  write_last_seq(*impl_, id, seq);
+  t.commit();
+}
+
+void ResultsStore::apply_remote(const std::string& id, const RemoteUpdate& u) {
+  std::lock_guard lock(impl_->mu);
+  impl_->require_remote_columns();
+  if (u.state) check_state(*impl_, id, *u.state);
+  for (const Snapshot& s : u.snapshots) {
+    check_snapshot_sizes(*impl_, s);
+    check_snapshot_values(*impl_, s);
+  }
+  Transaction t(*impl_);
+  const long before = read_last_seq(*impl_, id);
+  if (u.last_seq < before)
+    throw StoreError(impl_->where() + ": job '" + id + "': events up to " +
+                     std::to_string(u.last_seq) + " arrive after event " + std::to_string(before) +
+                     " was applied");
+  if (u.columns) write_columns(*impl_, id, *u.columns);
+  write_frames(*impl_, id, u.frames);
+  for (const Snapshot& s : u.snapshots) write_snapshot(*impl_, id, s);
+  if (u.state) {
+    write_state(*impl_, id, *u.state, u.reason);
+    if (is_final(*u.state)) {
+      Query q(*impl_, "UPDATE jobs SET finished_at = ? WHERE id = ? AND finished_at = ''",
+              "cannot finish job '" + id + "'");
+      q.bind(1, u.finished_at.empty() ? utc_now("%Y-%m-%dT%H:%M:%SZ") : u.finished_at);
+      q.bind(2, id).run();
+    }
+  }
+  if (u.report_json) {
+    Query q(*impl_, "UPDATE jobs SET summary_json = ? WHERE id = ?",
+            "cannot store the report of job '" + id + "'");
+    q.bind(1, *u.report_json).bind(2, id).run();
+  }
+  write_last_seq(*impl_, id, u.last_seq);
+  t.commit();
+}
+
 void ResultsStore::set_columns(const std::string& id, const std::vector<std::string>& columns) {
   std::lock_guard lock(impl_->mu);
   Transaction t(*impl_);
   require_job(*impl_, id);
-  if (count_rows(*impl_, "frames", id) > 0 && read_columns(*impl_, id) != columns)
-    throw StoreError(impl_->where() + ": job '" + id +
-                     "': the columns cannot change after frames were written");
-  Query(*impl_, "UPDATE jobs SET columns_json = ? WHERE id = ?", "cannot set the columns")
-      .bind(1, nlohmann::json(columns).dump())
-      .bind(2, id)
-      .run();
+  write_columns(*impl_, id, columns);
   t.commit();
 }
 
@@ -562,15 +764,7 @@ void ResultsStore::append_frames(const std::string& id, const std::vector<Series
   std::lock_guard lock(impl_->mu);
   Transaction t(*impl_);
   require_job(*impl_, id);
-  const std::vector<std::string> columns = read_columns(*impl_, id);
-  for (const SeriesFrame& f : frames) check_frame(*impl_, f, columns, id);
-  long seq = next_seq(*impl_, "frames", id);
-  for (const SeriesFrame& f : frames) {
-    Query q(*impl_, "INSERT INTO frames (job_id, seq, step, time_ps, vals) VALUES (?, ?, ?, ?, ?)",
-            "cannot write a frame of job '" + id + "'");
-    q.bind(1, id).bind(2, seq++).bind(3, f.step).bind(4, f.time_ps).bind_blob(5, encode(f.values));
-    q.run();
-  }
+  write_frames(*impl_, id, frames);
   t.commit();
 }
 
@@ -580,20 +774,14 @@ void ResultsStore::append_snapshot(const std::string& id, const Snapshot& snap) 
   check_snapshot_values(*impl_, snap);
   Transaction t(*impl_);
   require_job(*impl_, id);
-  Query q(*impl_,
-          std::string("INSERT INTO snapshots (job_id, seq, ") + kSnapshotColumns +
-              ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
-          "cannot write a snapshot of job '" + id + "'");
-  q.bind(1, id).bind(2, next_seq(*impl_, "snapshots", id));
-  bind_snapshot(q, snap);
-  q.run();
+  write_snapshot(*impl_, id, snap);
   t.commit();
 }
 
 std::vector<JobRecord> ResultsStore::list() const {
   std::lock_guard lock(impl_->mu);
   Query q(*impl_,
-          std::string("SELECT ") + kJobColumns + " FROM jobs ORDER BY created_at DESC, rowid DESC",
+          "SELECT " + impl_->job_columns() + " FROM jobs ORDER BY created_at DESC, rowid DESC",
           "cannot list the jobs");
   std::vector<JobRecord> jobs;
   while (q.step()) jobs.push_back(read_job(q));
@@ -604,14 +792,14 @@ std::optional<JobRecord> ResultsStore::find(const std::string& id_or_prefix) con
   std::lock_guard lock(impl_->mu);
   if (id_or_prefix.empty()) return std::nullopt;
   {
-    Query q(*impl_, std::string("SELECT ") + kJobColumns + " FROM jobs WHERE id = ?",
+    Query q(*impl_, "SELECT " + impl_->job_columns() + " FROM jobs WHERE id = ?",
             "cannot read the jobs");
     q.bind(1, id_or_prefix);
     if (q.step()) return read_job(q);
   }
   constexpr long kShown = 20;
   Query q(*impl_,
-          std::string("SELECT ") + kJobColumns +
+          "SELECT " + impl_->job_columns() +
               " FROM jobs WHERE substr(id, 1, length(?1)) = ?1 ORDER BY id LIMIT ?2",
           "cannot read the jobs");
   q.bind(1, id_or_prefix).bind(2, kShown + 1);

@@ -26,6 +26,22 @@ struct JobRecord {
   std::string summary_json;  // the final JSON document `--json` prints ("" until finished)
   std::string created_at;    // ISO 8601 UTC
   std::string finished_at;   // ISO 8601 UTC, "" while running
+  std::string server;        // the mdemd (HOST:PORT) that runs it; "" for a job run in-process
+  long last_seq = 0;         // of a daemon's job: the last event applied here (0: none yet)
+};
+
+// Events of a daemon's job (mdem watch) applied together, in one transaction with the sequence
+// number of the last event they cover, so that a watcher stopped at any moment resumes from
+// last_seq + 1 with no gap and no duplicate.
+struct RemoteUpdate {
+  std::optional<std::vector<std::string>> columns;  // SeriesColumns (before any frame)
+  std::vector<SeriesFrame> frames;
+  std::vector<Snapshot> snapshots;
+  std::optional<std::string> state;        // the latest state (a StateChange or the report's state)
+  std::string reason;                      // with `state`
+  std::string finished_at;                 // when `state` is final: the event's time ("" = now)
+  std::optional<std::string> report_json;  // the FinalReport, stored as summary_json
+  long last_seq = 0;                       // the last event covered (must not go down)
 };
 
 // Calls on one ResultsStore are serialised (safe from several threads); several processes may
@@ -49,6 +65,19 @@ class ResultsStore {
   void create_job(const JobRecord& job);  // state as given (normally RUNNING)
   void finish_job(const std::string& id, const std::string& state, const std::string& reason,
                   const std::string& summary_json);
+  // Sets the state and reason only (not finished_at nor the summary).
+  void set_state(const std::string& id, const std::string& state, const std::string& reason);
+
+  // A daemon's job (job.server set): inserted when new; when the id exists, its kind, spec,
+  // server and creation time are updated and its state, results and last_seq are kept.
+  void upsert_remote_job(const JobRecord& job);
+  // The last event of a daemon's job applied here (0: none; StoreError for an unknown job).
+  long last_seq(const std::string& id) const;
+  void set_last_seq(const std::string& id, long seq);
+  // Applies columns, frames, snapshots, the state and the report, and records u.last_seq, in one
+  // transaction: all of it or (on any error) nothing. StoreError when u.last_seq is below the
+  // job's last_seq (events applied twice).
+  void apply_remote(const std::string& id, const RemoteUpdate& u);
   // Column names of the job's series (set once, before the first frame).
   void set_columns(const std::string& id, const std::vector<std::string>& columns);
   // Appends frames / a snapshot (each call one transaction; values must be finite: a non-finite

@@ -4,41 +4,8 @@
 #include <sstream>
 
 #include "flags.h"
-#include "mdem/units.h"
 
 namespace mdem::cli {
-
-EngineJob twist_engine_job(const v1::JobSpec& spec) {
-  const v1::TwistSpec& t = spec.twist();
-  EngineJob job;
-  RopeSpec& r = job.twist.rope;
-  r.layers = t.layers();
-  r.segments = std::max(2, static_cast<int>(std::lround(t.length_nm() / 1.356)));
-  r.spacing = t.has_spacing_nm() ? t.spacing_nm() : 0.0;
-  r.missing.assign(t.missing_tubes().begin(), t.missing_tubes().end());
-  for (const v1::LineDefect& d : t.line_defects())
-    r.lines.push_back({d.angle_deg(), d.width(), d.length_fraction()});
-  r.grip_segments = t.grip_segments();
-  TwistLoading& l = job.twist.loading;
-  l.torque_max = units::nNnm(t.torque_nn_nm());
-  l.rate = units::nNnm(t.torque_rate_nn_nm_per_ps());
-  l.hold = t.hold_ps();
-  l.boundary = t.boundary() == v1::TWIST_RELAXATION ? TwistBoundary::TwistRelaxation
-                                                    : TwistBoundary::ConstantMoment;
-  l.grip_load = t.grip_load() == v1::PER_ELEMENT ? GripLoad::PerElement : GripLoad::RigidGrip;
-  l.unload = t.unload();
-  l.unload_hold = t.unload_hold_ps();
-  job.twist.vdw_damping_ratio = t.vdw_damping_ratio();
-  job.twist.temperature_k = t.temperature_k();
-  job.twist.seed = static_cast<unsigned>(spec.seed());
-  job.settings.local_damping = t.local_damping();
-  if (spec.run().has_dt_ps()) job.settings.dt = spec.run().dt_ps();
-  job.settings.safety = spec.run().safety();
-  job.settings.threads = spec.run().threads();
-  job.cadence.frame_every_ps = spec.outputs().energy_every_ps();
-  job.cadence.snapshot_every_ps = spec.outputs().snapshot_every_ps();
-  return job;
-}
 
 const std::map<std::string, std::string>& twist_flag_fields() {
   static const std::map<std::string, std::string> m = {
@@ -161,5 +128,69 @@ void apply_twist_flags(const std::map<std::string, std::string>& f, v1::JobSpec&
   if (has("--local-damping"))
     t.set_local_damping(number("--local-damping", val("--local-damping")));
 }
+
+FlagSpec twist_flag_spec() {
+  FlagSpec fs;
+  for (const auto& [flag, field] : twist_flag_fields())
+    if (flag != "--unload") fs.with_value.push_back(flag);
+  fs.with_value.push_back("--spec");
+  fs.switches = {"--unload"};
+  return fs;
+}
+
+v1::JobSpec twist_spec_from_flags(const std::map<std::string, std::string>& given) {
+  v1::JobSpec spec;
+  if (given.count("--spec")) spec = spec::load_file(given.at("--spec"));
+  if (spec.kind_case() != v1::JobSpec::kTwist && spec.kind_case() != v1::JobSpec::KIND_NOT_SET)
+    throw UsageError("--spec: the file describes another job kind (allowed here: twist)");
+  apply_twist_flags(given, spec);
+  return spec::finalize(spec);
+}
+
+std::string describe_spec_error(const spec::SpecError& e) {
+  std::ostringstream o;
+  for (const spec::FieldError& f : e.errors()) {
+    std::string flag;
+    for (const auto& [fl, field] : twist_flag_fields())
+      if (f.field == field || f.field.rfind(field + "[", 0) == 0) flag = fl;
+    o << "  " << f.field << (flag.empty() ? "" : " (" + flag + ")") << ": " << f.message << "\n";
+  }
+  return o.str();
+}
+
+const char* const kTwistSpecFlagsHelp =
+    "Spec:\n"
+    "  --spec FILE          a JobSpec as JSON or YAML (.json/.yaml/.yml); flags override it\n"
+    "Rope:\n"
+    "  --layers N           hexagon layers incl. the centre tube, 2..10 (default 6 = 91 "
+    "tubes)\n"
+    "  --length NM          tube length, 5..2000 nm, whole 1.356 nm segments (default 67.8)\n"
+    "  --spacing NM|auto    tube spacing 1.5..2.5 nm (default auto: the lattice vdW minimum)\n"
+    "  --missing I,J,...    point defects: lattice sites without a tube (0 = centre)\n"
+    "  --line-defects A[:W[:F]];...  rows of missing tubes from the centre at angle A deg,\n"
+    "                       W rows wide (1..3), over the central fraction F of the length\n"
+    "Loading:\n"
+    "  --torque X           T_max, (0, 500] nN·nm (default 64)\n"
+    "  --rate X             ramp rate, (0, 100] nN·nm/ps (default 1.0)\n"
+    "  --hold X             hold at T_max, 0..1e6 ps (default 100)\n"
+    "  --bc B               constant-moment (default) or twist-relaxation\n"
+    "  --grip-load G        rigid-grip (default: the grip's moment about the rope axis is T)\n"
+    "                       or per-element (each grip element carries T about its own\n"
+    "                       centre, the thesis's PFC ball moments)\n"
+    "  --unload             ramp the torque down after the hold, then relax\n"
+    "  --unload-hold X      relaxation after unloading, 0..1e6 ps (default 50)\n"
+    "  --grip-segments N    end segments per tube in each grip, 1..segments/4 (default 1)\n"
+    "  --damping-ratio X    vdW contact dashpot ratio, 0..1 (default 0.03)\n"
+    "  --local-damping X    PFC local damping, 0..0.99 (default 0.1)\n"
+    "  --temperature K      seeded random velocities and spins of K kelvin at the start,\n"
+    "                       0..2000 (default 0: at rest; noise lets buckling start)\n"
+    "Run:\n"
+    "  --dt X|auto          time step, 1e-6..1 ps (default auto = safety x critical step)\n"
+    "  --safety X           fraction of the critical step, (0, 1] (default 0.6)\n"
+    "  --threads N          OpenMP threads, 0 = all cores (default 0)\n"
+    "  --energy-every X     energy/observable frame interval, ps (default 1)\n"
+    "  --snapshot-every X   snapshot interval, ps; 0 = none (default 10)\n"
+    "  --name TEXT          a label for `mdem ls`\n"
+    "  --seed N             random seed for --temperature (default 1)\n";
 
 }  // namespace mdem::cli

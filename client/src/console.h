@@ -1,0 +1,63 @@
+#pragma once
+// What a job shows on the terminal, shared by `mdem run` (in-process) and `mdem watch` (a
+// daemon's job): the progress bar, Ctrl-C, and the final report in words.
+#include <atomic>
+#include <chrono>
+#include <optional>
+#include <ostream>
+#include <string>
+
+#include "flags.h"
+#include "mdem/job.h"
+
+namespace mdem::cli {
+
+// Progress: a redrawn bar with ETA on a terminal, a plain line every 10 % otherwise. The ETA
+// extrapolates from the first progress seen, so a watch that joins a job half-way is not misled
+// by the part it did not see.
+class ProgressReporter {
+ public:
+  ProgressReporter(std::ostream& err, bool tty, bool quiet) : err_(err), tty_(tty), quiet_(quiet) {}
+  void operator()(const JobProgress& p);
+  // A line of text (a log line, a notice) between progress updates: on a terminal the bar is
+  // wiped first and redrawn by the next update.
+  void note(const std::string& line);
+  // Ends a bar left open (a job that stopped before its last step).
+  void finish();
+
+ private:
+  static std::string clock(double s);
+  double seconds() const;
+  std::ostream& err_;
+  bool tty_, quiet_;
+  bool bar_open_ = false;
+  int last_decile_ = -1;
+  std::optional<double> frac0_;  // the first fraction seen
+  std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
+};
+
+// True when `err` is std::cerr and that is a terminal (the bar), false when piped (plain lines).
+bool is_terminal(const std::ostream& err);
+
+// Catches Ctrl-C (SIGINT) while alive, restoring the previous handler after; interrupted() tells
+// whether it was pressed since the guard was made.
+class InterruptGuard {
+ public:
+  InterruptGuard();
+  ~InterruptGuard();
+  InterruptGuard(const InterruptGuard&) = delete;
+  InterruptGuard& operator=(const InterruptGuard&) = delete;
+  static bool interrupted();
+
+ private:
+  void (*previous_)(int);
+};
+
+// A job's final report (the document `mdem run <kind> --json` prints: job_id, kind, state,
+// reason?, summary, accuracy, performance, and db) in words: the outcome on `out` (and a failure
+// on `err`), the summary's highlights, accuracy and speed, and where the results are.
+// time_ps: the simulated time, when known.
+void print_report(std::ostream& out, std::ostream& err, const json& doc,
+                  std::optional<double> time_ps);
+
+}  // namespace mdem::cli
