@@ -165,6 +165,11 @@ std::pair<std::string, std::map<std::string, std::string>> parse_id_and_flags(
   return {ids.front(), std::move(given)};
 }
 
+bool wants_help(const std::vector<std::string>& args) {
+  return std::any_of(args.begin(), args.end(),
+                     [](const std::string& a) { return a == "--help" || a == "-h"; });
+}
+
 void write_json(std::ostream& os, const json& j, int indent) {
   if (!j.is_object()) {
     os << j.dump();
@@ -179,6 +184,25 @@ void write_json(std::ostream& os, const json& j, int indent) {
     os << (++k < j.size() ? ",\n" : "\n");
   }
   os << std::string(indent, ' ') << "}";
+}
+
+json parse_or_text(const std::string& text) {
+  if (text.empty()) return nullptr;
+  json j = json::parse(text, nullptr, false);
+  return j.is_discarded() ? json(text) : j;
+}
+
+void print_table(std::ostream& os, const std::vector<std::vector<std::string>>& rows) {
+  std::vector<std::size_t> width(rows.front().size(), 0);
+  for (const auto& row : rows)
+    for (std::size_t c = 0; c < row.size(); ++c) width[c] = std::max(width[c], row[c].size());
+  for (const auto& row : rows) {
+    std::string line;
+    for (std::size_t c = 0; c < row.size(); ++c)
+      line += c + 1 < row.size() ? row[c] + std::string(width[c] - row[c].size() + 2, ' ') : row[c];
+    while (!line.empty() && line.back() == ' ') line.pop_back();
+    os << line << '\n';
+  }
 }
 
 }  // namespace mdem::cli

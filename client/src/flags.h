@@ -30,6 +30,9 @@ struct FlagSpec {
 std::map<std::string, std::string> parse_flags(const std::vector<std::string>& args,
                                                const FlagSpec& spec);
 
+// True when the command line asks for the help: --help or -h anywhere in it.
+bool wants_help(const std::vector<std::string>& args);
+
 // Parses the flags and the job ID: the one argument that is neither a flag nor a flag's value.
 // Flag errors come first, so `--bogus 1` is reported as an unknown flag, not as a second ID.
 // UsageError for a missing, empty or second ID.
@@ -50,5 +53,9 @@ std::vector<double> parse_list(const std::string& flag, const std::string& text,
 // JSON with keys in insertion order, written with arrays of numbers on one line.
 using json = nlohmann::ordered_json;
 void write_json(std::ostream& os, const json& j, int indent = 0);
+// Parsed JSON text; null when empty, the text itself when it is not JSON.
+json parse_or_text(const std::string& text);
+// Rows of cells as a table, the columns padded to their widest cell (rows: not empty).
+void print_table(std::ostream& os, const std::vector<std::vector<std::string>>& rows);
 
 }  // namespace mdem::cli

@@ -240,11 +240,10 @@ json probe_bond(const ProbeOptions& o) {
 }  // namespace
 
 int probe(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  for (const std::string& a : args)
-    if (a == "--help" || a == "-h") {
-      print_probe_help(out);
-      return kOk;
-    }
+  if (wants_help(args)) {
+    print_probe_help(out);
+    return kOk;
+  }
   try {
     const ProbeOptions o = parse_options(args);
     json result = o.model == ProbeOptions::Model::Bond ? probe_bond(o) : probe_vdw(o);

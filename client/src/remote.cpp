@@ -335,7 +335,9 @@ std::string describe_status(const grpc::Status& status, const ConnectionSettings
     case grpc::StatusCode::UNAVAILABLE:
       return "cannot reach mdemd at " + s + " (is it running? check --server" +
              (c.server_origin == "--server" ? "" : "; the address is from " + c.server_origin) +
-             (c.tls ? "; TLS is on: does the daemon use TLS?" : "") + ")" + detail;
+             (c.tls ? "; TLS is on: does the daemon use TLS?"
+                    : "; if the daemon serves TLS, add --tls --ca-file FILE") +
+             ")" + detail;
     case grpc::StatusCode::DEADLINE_EXCEEDED:
       return "mdemd at " + s + " did not answer within " + std::to_string(kCallDeadlineMs / 1000) +
              " s (is it overloaded, or is " + s + " another service? check --server)" + detail;

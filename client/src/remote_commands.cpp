@@ -106,15 +106,15 @@ void print_cancel_help(std::ostream& os) {
      << kRemoteExitHelp;
 }
 
-bool wants_help(const std::vector<std::string>& args) {
-  return std::any_of(args.begin(), args.end(),
-                     [](const std::string& a) { return a == "--help" || a == "-h"; });
-}
-
-// Runs a command body, turning what it throws into a message prefixed with the command and an
-// exit code.
+// Prints the command's help when asked for, else runs its body, turning what it throws into a
+// message prefixed with the command and an exit code.
 template <class Body>
-int guarded(const std::string& cmd, std::ostream& err, Body&& body) {
+int guarded(const std::string& cmd, const std::vector<std::string>& args, std::ostream& out,
+            std::ostream& err, void (*print_help)(std::ostream&), Body&& body) {
+  if (wants_help(args)) {
+    print_help(out);
+    return kOk;
+  }
   const std::string name = "mdem " + cmd;
   try {
     return body();
@@ -155,13 +155,6 @@ double reconnect_timeout(const std::map<std::string, std::string>& given) {
   const auto it = given.find("--reconnect-timeout");
   if (it == given.end()) return kDefaultReconnectTimeoutS;
   return parse_in_range("--reconnect-timeout", it->second, 0, 86400, "s");
-}
-
-// Parsed JSON text; null when empty, the text itself when it is not JSON.
-json parse_or_text(const std::string& text) {
-  if (text.empty()) return nullptr;
-  json j = json::parse(text, nullptr, false);
-  return j.is_discarded() ? json(text) : j;
 }
 
 // The local record of a daemon's job, from what the daemon says of it. The state starts at
@@ -711,20 +704,6 @@ int run_cancel(const std::vector<std::string>& args, std::ostream& out, std::ost
   return kOk;
 }
 
-// A table with columns padded to their widest cell.
-void print_table(std::ostream& os, const std::vector<std::vector<std::string>>& rows) {
-  std::vector<std::size_t> width(rows.front().size(), 0);
-  for (const auto& row : rows)
-    for (std::size_t c = 0; c < row.size(); ++c) width[c] = std::max(width[c], row[c].size());
-  for (const auto& row : rows) {
-    std::string line;
-    for (std::size_t c = 0; c < row.size(); ++c)
-      line += c + 1 < row.size() ? row[c] + std::string(width[c] - row[c].size() + 2, ' ') : row[c];
-    while (!line.empty() && line.back() == ' ') line.pop_back();
-    os << line << '\n';
-  }
-}
-
 std::string progress_text(const v1::JobInfo& info) {
   if (info.total_steps() <= 0) return "-";
   return std::to_string(info.step() * 100 / info.total_steps()) + "%";
@@ -813,27 +792,18 @@ int remote_show(const std::string& id, const std::map<std::string, std::string>&
 }
 
 int submit(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  if (wants_help(args)) {
-    print_submit_help(out);
-    return kOk;
-  }
-  return guarded("submit", err, [&] { return run_submit(args, out, err); });
+  return guarded("submit", args, out, err, print_submit_help,
+                 [&] { return run_submit(args, out, err); });
 }
 
 int watch(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  if (wants_help(args)) {
-    print_watch_help(out);
-    return kOk;
-  }
-  return guarded("watch", err, [&] { return run_watch(args, out, err); });
+  return guarded("watch", args, out, err, print_watch_help,
+                 [&] { return run_watch(args, out, err); });
 }
 
 int cancel(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  if (wants_help(args)) {
-    print_cancel_help(out);
-    return kOk;
-  }
-  return guarded("cancel", err, [&] { return run_cancel(args, out, err); });
+  return guarded("cancel", args, out, err, print_cancel_help,
+                 [&] { return run_cancel(args, out, err); });
 }
 
 }  // namespace mdem::cli

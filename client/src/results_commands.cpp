@@ -117,19 +117,20 @@ void print_plot_help(std::ostream& os) {
      << kExitHelp;
 }
 
-bool wants_help(const std::vector<std::string>& args) {
-  return std::any_of(args.begin(), args.end(),
-                     [](const std::string& a) { return a == "--help" || a == "-h"; });
-}
-
 // The job id matches nothing (exit kJobFailed).
 struct NoSuchJob : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Runs a command body, mapping errors to exit codes and messages prefixed with the command.
+// Prints the command's help when asked for, else runs its body, mapping errors to exit codes and
+// messages prefixed with the command.
 template <class Body>
-int guarded(const std::string& cmd, std::ostream& err, Body&& body) {
+int guarded(const std::string& cmd, const std::vector<std::string>& args, std::ostream& out,
+            std::ostream& err, void (*print_help)(std::ostream&), Body&& body) {
+  if (wants_help(args)) {
+    print_help(out);
+    return kOk;
+  }
   try {
     return body();
   } catch (const UsageError& e) {
@@ -172,13 +173,6 @@ JobRecord resolve(const ResultsStore& store, const std::string& id) {
   return std::move(*job);
 }
 
-// Parsed JSON text; null when empty, the text itself when it is not JSON.
-json parse_or_text(const std::string& text) {
-  if (text.empty()) return nullptr;
-  json j = json::parse(text, nullptr, false);
-  return j.is_discarded() ? json(text) : j;
-}
-
 json job_json(const JobRecord& job) {
   return json{{"id", job.id},
               {"kind", job.kind},
@@ -210,19 +204,6 @@ std::string highlights(const JobRecord& job) {
   for (const std::string& p : parts) text += (text.empty() ? "" : "; ") + p;
   constexpr std::size_t kMax = 72;
   return text.size() > kMax ? text.substr(0, kMax - 3) + "..." : text;
-}
-
-void print_table(std::ostream& os, const std::vector<std::vector<std::string>>& rows) {
-  std::vector<std::size_t> width(rows.front().size(), 0);
-  for (const auto& row : rows)
-    for (std::size_t c = 0; c < row.size(); ++c) width[c] = std::max(width[c], row[c].size());
-  for (const auto& row : rows) {
-    std::string line;
-    for (std::size_t c = 0; c < row.size(); ++c)
-      line += c + 1 < row.size() ? row[c] + std::string(width[c] - row[c].size() + 2, ' ') : row[c];
-    while (!line.empty() && line.back() == ' ') line.pop_back();
-    os << line << '\n';
-  }
 }
 
 // Whether ls/show ask the daemon: --server, or $MDEM_SERVER without --local or --db. The flags only
@@ -370,35 +351,20 @@ int run_plot(const std::vector<std::string>& args, std::ostream& out) {
 }  // namespace
 
 int ls(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  if (wants_help(args)) {
-    print_ls_help(out);
-    return kOk;
-  }
-  return guarded("ls", err, [&] { return run_ls(args, out, err); });
+  return guarded("ls", args, out, err, print_ls_help, [&] { return run_ls(args, out, err); });
 }
 
 int show(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  if (wants_help(args)) {
-    print_show_help(out);
-    return kOk;
-  }
-  return guarded("show", err, [&] { return run_show(args, out, err); });
+  return guarded("show", args, out, err, print_show_help, [&] { return run_show(args, out, err); });
 }
 
 int export_job(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  if (wants_help(args)) {
-    print_export_help(out);
-    return kOk;
-  }
-  return guarded("export", err, [&] { return run_export(args, out); });
+  return guarded("export", args, out, err, print_export_help,
+                 [&] { return run_export(args, out); });
 }
 
 int plot(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  if (wants_help(args)) {
-    print_plot_help(out);
-    return kOk;
-  }
-  return guarded("plot", err, [&] { return run_plot(args, out); });
+  return guarded("plot", args, out, err, print_plot_help, [&] { return run_plot(args, out); });
 }
 
 }  // namespace mdem::cli

@@ -1,10 +1,8 @@
-// The local results database on the SQLite3 C API: WAL journal, a versioned schema, cached
-// prepared statements, one transaction per write, and every failure a StoreError that names the
-// file and SQLite's message. Arrays are stored as BLOBs of little-endian float64 / int32 values,
-// so doubles come back bit for bit.
+// The local results database on mdem_sqlite (the SQLite layer shared with the daemon): WAL
+// journal, a versioned schema, cached prepared statements, one transaction per write, and every
+// failure a StoreError that names the file and SQLite's message. Arrays are stored as BLOBs of
+// little-endian float64 / int32 values, so doubles come back bit for bit.
 #include "results_store.h"
-
-#include <sqlite3.h>
 
 #include <bit>
 #include <chrono>
@@ -14,11 +12,13 @@
 #include <cstdlib>
 #include <ctime>
 #include <filesystem>
-#include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <set>
+#include <utility>
+
+#include "mdem/sqlite_db.h"
 
 namespace mdem::cli {
 namespace {
@@ -153,16 +153,14 @@ std::string env(const char* name) {
 
 // ---- the connection ---------------------------------------------------------------------------
 
-// The connection and its statement cache (ResultsStore::Impl is this, named outside the class
-// so that the helpers below can take it).
-struct StoreDb {
-  std::string path;
-  sqlite3* db = nullptr;
-  std::map<std::string, sqlite3_stmt*> statements;  // prepared once, reset after each use
-  std::mutex mu;                                    // one call at a time per store
+// The connection (mdem_sqlite: statement cache, queries, transactions) and what this store knows
+// of the file's schema. ResultsStore::Impl is this, named outside the class so that the helpers
+// below can take it. The layer's SqliteError becomes StoreError at the public interface (call).
+struct StoreDb : SqliteDb {
   bool remote_columns = true;  // jobs has server and last_seq (false: an old read-only file)
 
-  explicit StoreDb(std::string p) : path(std::move(p)) {}
+  explicit StoreDb(std::string path)
+      : SqliteDb(std::move(path), "results database", "NORMAL", kBusyTimeoutMs) {}
   std::string job_columns() const { return remote_columns ? kJobColumns : kOldJobColumns; }
   void require_remote_columns() const {
     if (!remote_columns)
@@ -170,134 +168,18 @@ struct StoreDb {
                        ": read-only and of an older schema (no server/last_seq columns); open it "
                        "writable once to upgrade it");
   }
-  ~StoreDb() {
-    for (auto& [sql, s] : statements) sqlite3_finalize(s);
-    if (db) sqlite3_close_v2(db);
-  }
-
-  std::string where() const { return "results database '" + path + "'"; }
-  [[noreturn]] void fail(const std::string& what) const {
-    throw StoreError(where() + ": " + what + ": " + (db ? sqlite3_errmsg(db) : "out of memory"));
-  }
-  void exec(const char* sql, const std::string& what) {
-    if (sqlite3_exec(db, sql, nullptr, nullptr, nullptr) != SQLITE_OK) fail(what);
-  }
-  sqlite3_stmt* prepare(const std::string& sql) {
-    auto it = statements.find(sql);
-    if (it != statements.end()) return it->second;
-    sqlite3_stmt* s = nullptr;
-    if (sqlite3_prepare_v3(db, sql.c_str(), -1, SQLITE_PREPARE_PERSISTENT, &s, nullptr) !=
-        SQLITE_OK)
-      fail("cannot prepare '" + sql + "'");
-    statements.emplace(sql, s);
-    return s;
-  }
 };
 
 using Impl = StoreDb;
 
-// One use of a cached prepared statement: bind, step, read; reset on destruction.
-class Query {
- public:
-  Query(Impl& db, const std::string& sql, std::string what)
-      : db_(db), s_(db.prepare(sql)), what_(std::move(what)) {}
-  ~Query() {
-    sqlite3_reset(s_);
-    sqlite3_clear_bindings(s_);
+// Runs f, turning an error of the SQLite layer into a StoreError with the same message.
+template <class F>
+decltype(auto) store_errors(F&& f) {
+  try {
+    return f();
+  } catch (const SqliteError& e) {
+    throw StoreError(e.what());
   }
-  Query(const Query&) = delete;
-  Query& operator=(const Query&) = delete;
-
-  Query& bind(int i, const std::string& text) {
-    return check(
-        sqlite3_bind_text(s_, i, text.data(), static_cast<int>(text.size()), SQLITE_TRANSIENT));
-  }
-  Query& bind(int i, double v) { return check(sqlite3_bind_double(s_, i, v)); }
-  Query& bind(int i, long v) { return check(sqlite3_bind_int64(s_, i, v)); }
-  Query& bind_blob(int i, const std::string& bytes) {
-    return check(sqlite3_bind_blob64(s_, i, bytes.data(), bytes.size(), SQLITE_TRANSIENT));
-  }
-  // True while there is a row to read.
-  bool step() {
-    const int rc = sqlite3_step(s_);
-    if (rc == SQLITE_ROW) return true;
-    if (rc == SQLITE_DONE) return false;
-    db_.fail(what_);
-  }
-  void run() {
-    while (step()) {
-    }
-    sqlite3_reset(s_);
-  }
-  std::string text(int col) const {
-    const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(s_, col));
-    return p ? std::string(p, sqlite3_column_bytes(s_, col)) : std::string();
-  }
-  std::string blob(int col) const {
-    const auto* p = static_cast<const char*>(sqlite3_column_blob(s_, col));
-    return p ? std::string(p, sqlite3_column_bytes(s_, col)) : std::string();
-  }
-  double real(int col) const { return sqlite3_column_double(s_, col); }
-  long integer(int col) const { return static_cast<long>(sqlite3_column_int64(s_, col)); }
-
- private:
-  Query& check(int rc) {
-    if (rc != SQLITE_OK) db_.fail(what_);
-    return *this;
-  }
-  Impl& db_;
-  sqlite3_stmt* s_;
-  std::string what_;
-};
-
-// BEGIN IMMEDIATE (takes the write lock up front, waiting up to the busy timeout); rolls back
-// unless committed.
-class Transaction {
- public:
-  explicit Transaction(Impl& db) : db_(db) { db_.exec("BEGIN IMMEDIATE", "cannot begin a write"); }
-  ~Transaction() {
-    if (!done_) sqlite3_exec(db_.db, "ROLLBACK", nullptr, nullptr, nullptr);
-  }
-  Transaction(const Transaction&) = delete;
-  Transaction& operator=(const Transaction&) = delete;
-  void commit() {
-    db_.exec("COMMIT", "cannot commit");
-    done_ = true;
-  }
-
- private:
-  Impl& db_;
-  bool done_ = false;
-};
-
-void create_parent_dirs(const Impl& db) {
-  const fs::path parent = fs::path(db.path).parent_path();
-  if (parent.empty()) return;
-  std::error_code ec;
-  fs::create_directories(parent, ec);
-  if (ec)
-    throw StoreError(db.where() + ": cannot create the directory '" + parent.string() +
-                     "': " + ec.message());
-}
-
-void open_connection(Impl& db) {
-  if (db.path.empty()) throw StoreError("results database: empty path");
-  create_parent_dirs(db);
-  const int rc =
-      sqlite3_open_v2(db.path.c_str(), &db.db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr);
-  if (rc != SQLITE_OK) db.fail("cannot open");
-  sqlite3_extended_result_codes(db.db, 1);
-  sqlite3_busy_timeout(db.db, kBusyTimeoutMs);
-  // The first statement reads the file header: a file that is not a database fails here.
-  db.exec("PRAGMA journal_mode=WAL", "cannot read (is it an SQLite database?)");
-  db.exec("PRAGMA synchronous=NORMAL", "cannot configure");
-  db.exec("PRAGMA foreign_keys=ON", "cannot configure");
-}
-
-bool has_table(Impl& db, const std::string& name) {
-  Query q(db, "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = ?", "cannot read");
-  q.bind(1, name);
-  return q.step();
 }
 
 long table_count(Impl& db) {
@@ -315,29 +197,24 @@ void check_schema_version(Impl& db) {
                      (v > kSchemaVersion ? " (written by a newer mdem)" : ""));
 }
 
-bool has_column(Impl& db, const char* table, const char* column) {
-  Query q(db, "SELECT 1 FROM pragma_table_info(?) WHERE name = ?", "cannot read the schema");
-  q.bind(1, std::string(table)).bind(2, std::string(column));
-  return q.step();
-}
-
 bool needs_migration(Impl& db) {
   for (const auto& [column, definition] : kMigrations)
-    if (!has_column(db, "jobs", column)) return true;
+    if (!db.has_column("jobs", column)) return true;
   return false;
 }
 
-// Adds the columns of kMigrations that a file of an older mdem lacks. A read-only file is left
-// as it is (and read with defaults for the missing columns).
+// Adds the columns of kMigrations that a file of an older mdem lacks. A read-only file (opened
+// read-only by SQLite when the file is write-protected) is left as it is and read with defaults
+// for the missing columns.
 void migrate(Impl& db) {
   if (!needs_migration(db)) return;
-  if (sqlite3_db_readonly(db.db, "main") == 1) {
+  if (sqlite3_db_readonly(db.handle(), "main") == 1) {
     db.remote_columns = false;
     return;
   }
   Transaction t(db);
   for (const auto& [column, definition] : kMigrations)
-    if (!has_column(db, "jobs", column))  // another process may have added it meanwhile
+    if (!db.has_column("jobs", column))  // another process may have added it meanwhile
       db.exec((std::string("ALTER TABLE jobs ADD COLUMN ") + definition).c_str(),
               std::string("cannot add the column '") + column + "' to the jobs table");
   t.commit();
@@ -346,12 +223,12 @@ void migrate(Impl& db) {
 // Checks the schema of an existing database (reading only, so a read-only file can be listed;
 // a writable file of an older schema is upgraded), or creates it in a new one.
 void ensure_schema(Impl& db) {
-  if (has_table(db, "schema_version")) {
+  if (db.has_table("schema_version")) {
     check_schema_version(db);
     return migrate(db);
   }
   Transaction t(db);
-  if (has_table(db, "schema_version")) {  // created meanwhile
+  if (db.has_table("schema_version")) {  // created meanwhile
     check_schema_version(db);
     t.commit();
     return migrate(db);
@@ -609,13 +486,30 @@ void write_last_seq(Impl& db, const std::string& id, long seq) {
 
 struct ResultsStore::Impl : StoreDb {
   using StoreDb::StoreDb;
+
+  // Runs f(db) as the only call on this connection, an error of the SQLite layer a StoreError.
+  template <class F>
+  decltype(auto) call(F&& f) {
+    std::lock_guard lock(mutex());
+    return store_errors([&]() -> decltype(auto) { return f(static_cast<StoreDb&>(*this)); });
+  }
+  // Runs write(db) in one transaction on job `id`, which must exist.
+  template <class F>
+  void write_job(const std::string& id, F&& write) {
+    call([&](StoreDb& db) {
+      Transaction t(db);
+      require_job(db, id);
+      write(db);
+      t.commit();
+    });
+  }
 };
 
 // ---- public interface -------------------------------------------------------------------------
 
-ResultsStore::ResultsStore(const std::string& path) : impl_(std::make_unique<Impl>(path)) {
-  open_connection(*impl_);
-  ensure_schema(*impl_);
+ResultsStore::ResultsStore(const std::string& path)
+    : impl_(store_errors([&] { return std::make_unique<Impl>(path); })) {
+  impl_->call([](StoreDb& db) { ensure_schema(db); });
 }
 
 ResultsStore::~ResultsStore() = default;
@@ -633,7 +527,7 @@ std::string ResultsStore::default_path() {
   return (fs::path(home) / ".local" / "share" / "mdem" / "results.db").string();
 }
 
-const std::string& ResultsStore::path() const { return impl_->path; }
+const std::string& ResultsStore::path() const { return impl_->path(); }
 
 std::string ResultsStore::new_job_id() {
   static std::mutex mu;
@@ -646,227 +540,211 @@ std::string ResultsStore::new_job_id() {
 }
 
 void ResultsStore::create_job(const JobRecord& job) {
-  std::lock_guard lock(impl_->mu);
   if (job.id.empty()) throw StoreError(impl_->where() + ": a job needs an id");
   check_state(*impl_, job.id, job.state);
-  Query q(
-      *impl_,
-      std::string("INSERT INTO jobs (") + kInsertJobColumns + ") VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
-      "cannot create job '" + job.id + "'");
-  q.bind(1, job.id).bind(2, job.kind).bind(3, job.spec_json).bind(4, job.state);
-  q.bind(5, job.reason).bind(6, job.summary_json);
-  q.bind(7, job.created_at.empty() ? utc_now("%Y-%m-%dT%H:%M:%SZ") : job.created_at);
-  q.bind(8, job.finished_at);
-  q.run();
+  impl_->call([&](StoreDb& db) {
+    Query q(
+        db,
+        std::string("INSERT INTO jobs (") + kInsertJobColumns + ") VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+        "cannot create job '" + job.id + "'");
+    q.bind(1, job.id).bind(2, job.kind).bind(3, job.spec_json).bind(4, job.state);
+    q.bind(5, job.reason).bind(6, job.summary_json);
+    q.bind(7, job.created_at.empty() ? utc_now("%Y-%m-%dT%H:%M:%SZ") : job.created_at);
+    q.bind(8, job.finished_at);
+    q.run();
+  });
 }
 
 void ResultsStore::finish_job(const std::string& id, const std::string& state,
                               const std::string& reason, const std::string& summary_json) {
-  std::lock_guard lock(impl_->mu);
   if (!kStates.count(state))
     throw StoreError(impl_->where() + ": job '" + id + "': unknown state '" + state + "'");
-  Query q(*impl_,
-          "UPDATE jobs SET state = ?, reason = ?, summary_json = ?, finished_at = ? WHERE id = ?",
-          "cannot finish job '" + id + "'");
-  q.bind(1, state).bind(2, reason).bind(3, summary_json);
-  q.bind(4, utc_now("%Y-%m-%dT%H:%M:%SZ")).bind(5, id);
-  q.run();
-  if (sqlite3_changes(impl_->db) == 0) throw StoreError(impl_->where() + ": no job '" + id + "'");
+  impl_->call([&](StoreDb& db) {
+    Query q(db,
+            "UPDATE jobs SET state = ?, reason = ?, summary_json = ?, finished_at = ? WHERE id = ?",
+            "cannot finish job '" + id + "'");
+    q.bind(1, state).bind(2, reason).bind(3, summary_json);
+    q.bind(4, utc_now("%Y-%m-%dT%H:%M:%SZ")).bind(5, id);
+    q.run();
+    if (sqlite3_changes(db.handle()) == 0) throw StoreError(db.where() + ": no job '" + id + "'");
+  });
 }
 
 void ResultsStore::set_state(const std::string& id, const std::string& state,
                              const std::string& reason) {
-  std::lock_guard lock(impl_->mu);
   check_state(*impl_, id, state);
-  Transaction t(*impl_);
-  require_job(*impl_, id);
-  write_state(*impl_, id, state, reason);
-  t.commit();
+  impl_->write_job(id, [&](StoreDb& db) { write_state(db, id, state, reason); });
 }
 
 void ResultsStore::upsert_remote_job(const JobRecord& job) {
-  std::lock_guard lock(impl_->mu);
   impl_->require_remote_columns();
   if (job.id.empty()) throw StoreError(impl_->where() + ": a job needs an id");
   if (job.server.empty())
     throw StoreError(impl_->where() + ": job '" + job.id + "': a daemon's job needs its server");
   check_state(*impl_, job.id, job.state);
-  Query q(*impl_,
-          std::string("INSERT INTO jobs (") + kJobColumns +
-              ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (id) DO UPDATE SET kind = "
-              "excluded.kind, spec_json = excluded.spec_json, server = excluded.server, "
-              "created_at = excluded.created_at",
-          "cannot record job '" + job.id + "'");
-  q.bind(1, job.id).bind(2, job.kind).bind(3, job.spec_json).bind(4, job.state);
-  q.bind(5, job.reason).bind(6, job.summary_json);
-  q.bind(7, job.created_at.empty() ? utc_now("%Y-%m-%dT%H:%M:%SZ") : job.created_at);
-  q.bind(8, job.finished_at).bind(9, job.server).bind(10, job.last_seq);
-  q.run();
+  impl_->call([&](StoreDb& db) {
+    Query q(db,
+            std::string("INSERT INTO jobs (") + kJobColumns +
+                ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (id) DO UPDATE SET kind = "
+                "excluded.kind, spec_json = excluded.spec_json, server = excluded.server, "
+                "created_at = excluded.created_at",
+            "cannot record job '" + job.id + "'");
+    q.bind(1, job.id).bind(2, job.kind).bind(3, job.spec_json).bind(4, job.state);
+    q.bind(5, job.reason).bind(6, job.summary_json);
+    q.bind(7, job.created_at.empty() ? utc_now("%Y-%m-%dT%H:%M:%SZ") : job.created_at);
+    q.bind(8, job.finished_at).bind(9, job.server).bind(10, job.last_seq);
+    q.run();
+  });
 }
 
 long ResultsStore::last_seq(const std::string& id) const {
-  std::lock_guard lock(impl_->mu);
-  return read_last_seq(*impl_, id);
+  return impl_->call([&](StoreDb& db) { return read_last_seq(db, id); });
 }
 
 void ResultsStore::set_last_seq(const std::string& id, long seq) {
-  std::lock_guard lock(impl_->mu);
-  Transaction t(*impl_);
-  require_job(*impl_, id);
-  write_last_seq(*impl_, id, seq);
-  t.commit();
+  impl_->write_job(id, [&](StoreDb& db) { write_last_seq(db, id, seq); });
 }
 
 void ResultsStore::apply_remote(const std::string& id, const RemoteUpdate& u) {
-  std::lock_guard lock(impl_->mu);
   impl_->require_remote_columns();
   if (u.state) check_state(*impl_, id, *u.state);
   for (const Snapshot& s : u.snapshots) {
     check_snapshot_sizes(*impl_, s);
     check_snapshot_values(*impl_, s);
   }
-  Transaction t(*impl_);
-  const long before = read_last_seq(*impl_, id);
-  if (u.last_seq < before)
-    throw StoreError(impl_->where() + ": job '" + id + "': events up to " +
-                     std::to_string(u.last_seq) + " arrive after event " + std::to_string(before) +
-                     " was applied");
-  if (u.columns) write_columns(*impl_, id, *u.columns);
-  write_frames(*impl_, id, u.frames);
-  for (const Snapshot& s : u.snapshots) write_snapshot(*impl_, id, s);
-  if (u.state) {
-    write_state(*impl_, id, *u.state, u.reason);
-    if (is_final(*u.state)) {
-      Query q(*impl_, "UPDATE jobs SET finished_at = ? WHERE id = ? AND finished_at = ''",
-              "cannot finish job '" + id + "'");
-      q.bind(1, u.finished_at.empty() ? utc_now("%Y-%m-%dT%H:%M:%SZ") : u.finished_at);
-      q.bind(2, id).run();
+  impl_->call([&](StoreDb& db) {
+    Transaction t(db);
+    const long before = read_last_seq(db, id);
+    if (u.last_seq < before)
+      throw StoreError(db.where() + ": job '" + id + "': events up to " +
+                       std::to_string(u.last_seq) + " arrive after event " +
+                       std::to_string(before) + " was applied");
+    if (u.columns) write_columns(db, id, *u.columns);
+    write_frames(db, id, u.frames);
+    for (const Snapshot& s : u.snapshots) write_snapshot(db, id, s);
+    if (u.state) {
+      write_state(db, id, *u.state, u.reason);
+      if (is_final(*u.state)) {
+        Query q(db, "UPDATE jobs SET finished_at = ? WHERE id = ? AND finished_at = ''",
+                "cannot finish job '" + id + "'");
+        q.bind(1, u.finished_at.empty() ? utc_now("%Y-%m-%dT%H:%M:%SZ") : u.finished_at);
+        q.bind(2, id).run();
+      }
     }
-  }
-  if (u.report_json) {
-    Query q(*impl_, "UPDATE jobs SET summary_json = ? WHERE id = ?",
-            "cannot store the report of job '" + id + "'");
-    q.bind(1, *u.report_json).bind(2, id).run();
-  }
-  write_last_seq(*impl_, id, u.last_seq);
-  t.commit();
+    if (u.report_json) {
+      Query q(db, "UPDATE jobs SET summary_json = ? WHERE id = ?",
+              "cannot store the report of job '" + id + "'");
+      q.bind(1, *u.report_json).bind(2, id).run();
+    }
+    write_last_seq(db, id, u.last_seq);
+    t.commit();
+  });
 }
 
 void ResultsStore::set_columns(const std::string& id, const std::vector<std::string>& columns) {
-  std::lock_guard lock(impl_->mu);
-  Transaction t(*impl_);
-  require_job(*impl_, id);
-  write_columns(*impl_, id, columns);
-  t.commit();
+  impl_->write_job(id, [&](StoreDb& db) { write_columns(db, id, columns); });
 }
 
 void ResultsStore::append_frames(const std::string& id, const std::vector<SeriesFrame>& frames) {
-  std::lock_guard lock(impl_->mu);
-  Transaction t(*impl_);
-  require_job(*impl_, id);
-  write_frames(*impl_, id, frames);
-  t.commit();
+  impl_->write_job(id, [&](StoreDb& db) { write_frames(db, id, frames); });
 }
 
 void ResultsStore::append_snapshot(const std::string& id, const Snapshot& snap) {
-  std::lock_guard lock(impl_->mu);
   check_snapshot_sizes(*impl_, snap);
   check_snapshot_values(*impl_, snap);
-  Transaction t(*impl_);
-  require_job(*impl_, id);
-  write_snapshot(*impl_, id, snap);
-  t.commit();
+  impl_->write_job(id, [&](StoreDb& db) { write_snapshot(db, id, snap); });
 }
 
 std::vector<JobRecord> ResultsStore::list() const {
-  std::lock_guard lock(impl_->mu);
-  Query q(*impl_,
-          "SELECT " + impl_->job_columns() + " FROM jobs ORDER BY created_at DESC, rowid DESC",
-          "cannot list the jobs");
-  std::vector<JobRecord> jobs;
-  while (q.step()) jobs.push_back(read_job(q));
-  return jobs;
+  return impl_->call([&](StoreDb& db) {
+    Query q(db, "SELECT " + db.job_columns() + " FROM jobs ORDER BY created_at DESC, rowid DESC",
+            "cannot list the jobs");
+    std::vector<JobRecord> jobs;
+    while (q.step()) jobs.push_back(read_job(q));
+    return jobs;
+  });
 }
 
 std::optional<JobRecord> ResultsStore::find(const std::string& id_or_prefix) const {
-  std::lock_guard lock(impl_->mu);
   if (id_or_prefix.empty()) return std::nullopt;
-  {
-    Query q(*impl_, "SELECT " + impl_->job_columns() + " FROM jobs WHERE id = ?",
-            "cannot read the jobs");
-    q.bind(1, id_or_prefix);
-    if (q.step()) return read_job(q);
-  }
   constexpr long kShown = 20;
-  Query q(*impl_,
-          "SELECT " + impl_->job_columns() +
-              " FROM jobs WHERE substr(id, 1, length(?1)) = ?1 ORDER BY id LIMIT ?2",
-          "cannot read the jobs");
-  q.bind(1, id_or_prefix).bind(2, kShown + 1);
-  std::vector<JobRecord> matches;
-  while (q.step()) matches.push_back(read_job(q));
+  const std::vector<JobRecord> matches = impl_->call([&](StoreDb& db) {
+    {
+      Query q(db, "SELECT " + db.job_columns() + " FROM jobs WHERE id = ?", "cannot read the jobs");
+      q.bind(1, id_or_prefix);
+      if (q.step()) return std::vector<JobRecord>{read_job(q)};
+    }
+    Query q(db,
+            "SELECT " + db.job_columns() +
+                " FROM jobs WHERE substr(id, 1, length(?1)) = ?1 ORDER BY id LIMIT ?2",
+            "cannot read the jobs");
+    q.bind(1, id_or_prefix).bind(2, kShown + 1);
+    std::vector<JobRecord> found;
+    while (q.step()) found.push_back(read_job(q));
+    return found;
+  });
   if (matches.empty()) return std::nullopt;
   if (matches.size() == 1) return matches.front();
   std::string list;
   for (std::size_t k = 0; k < matches.size() && k < kShown; ++k)
     list += (k ? ", " : "") + matches[k].id;
   if (matches.size() > kShown) list += ", ...";
-  throw StoreError("job id prefix '" + id_or_prefix + "' is ambiguous in '" + impl_->path +
+  throw StoreError("job id prefix '" + id_or_prefix + "' is ambiguous in '" + impl_->path() +
                    "': it matches " + list);
 }
 
 std::vector<std::string> ResultsStore::columns(const std::string& id) const {
-  std::lock_guard lock(impl_->mu);
-  return read_columns(*impl_, id);
+  return impl_->call([&](StoreDb& db) { return read_columns(db, id); });
 }
 
 std::vector<SeriesFrame> ResultsStore::frames(const std::string& id) const {
-  std::lock_guard lock(impl_->mu);
-  Query q(*impl_, "SELECT step, time_ps, vals FROM frames WHERE job_id = ? ORDER BY seq",
-          "cannot read the frames of job '" + id + "'");
-  q.bind(1, id);
-  std::vector<SeriesFrame> frames;
-  while (q.step()) {
-    const std::string vals = q.blob(2);
-    if (vals.size() % 8 != 0) throw StoreError(impl_->where() + ": corrupt frame values");
-    SeriesFrame f{q.integer(0), q.real(1), std::vector<double>(vals.size() / 8)};
-    for (std::size_t k = 0; k < f.values.size(); ++k) f.values[k] = get_f64(vals, k);
-    frames.push_back(std::move(f));
-  }
-  return frames;
+  return impl_->call([&](StoreDb& db) {
+    Query q(db, "SELECT step, time_ps, vals FROM frames WHERE job_id = ? ORDER BY seq",
+            "cannot read the frames of job '" + id + "'");
+    q.bind(1, id);
+    std::vector<SeriesFrame> frames;
+    while (q.step()) {
+      const std::string vals = q.blob(2);
+      if (vals.size() % 8 != 0) throw StoreError(db.where() + ": corrupt frame values");
+      SeriesFrame f{q.integer(0), q.real(1), std::vector<double>(vals.size() / 8)};
+      for (std::size_t k = 0; k < f.values.size(); ++k) f.values[k] = get_f64(vals, k);
+      frames.push_back(std::move(f));
+    }
+    return frames;
+  });
 }
 
 std::size_t ResultsStore::frame_count(const std::string& id) const {
-  std::lock_guard lock(impl_->mu);
-  return count_rows(*impl_, "frames", id);
+  return impl_->call([&](StoreDb& db) { return count_rows(db, "frames", id); });
 }
 
 std::size_t ResultsStore::snapshot_count(const std::string& id) const {
-  std::lock_guard lock(impl_->mu);
-  return count_rows(*impl_, "snapshots", id);
+  return impl_->call([&](StoreDb& db) { return count_rows(db, "snapshots", id); });
 }
 
 std::vector<Snapshot> ResultsStore::snapshots(const std::string& id) const {
-  std::lock_guard lock(impl_->mu);
-  Query q(
-      *impl_,
-      std::string("SELECT ") + kSnapshotColumns + " FROM snapshots WHERE job_id = ? ORDER BY seq",
-      "cannot read the snapshots of job '" + id + "'");
-  q.bind(1, id);
-  std::vector<Snapshot> snaps;
-  while (q.step()) snaps.push_back(read_snapshot(*impl_, q));
-  return snaps;
+  return impl_->call([&](StoreDb& db) {
+    Query q(
+        db,
+        std::string("SELECT ") + kSnapshotColumns + " FROM snapshots WHERE job_id = ? ORDER BY seq",
+        "cannot read the snapshots of job '" + id + "'");
+    q.bind(1, id);
+    std::vector<Snapshot> snaps;
+    while (q.step()) snaps.push_back(read_snapshot(db, q));
+    return snaps;
+  });
 }
 
 std::optional<Snapshot> ResultsStore::snapshot(const std::string& id, std::size_t k) const {
-  std::lock_guard lock(impl_->mu);
-  Query q(*impl_,
-          std::string("SELECT ") + kSnapshotColumns +
-              " FROM snapshots WHERE job_id = ? ORDER BY seq LIMIT 1 OFFSET ?",
-          "cannot read a snapshot of job '" + id + "'");
-  q.bind(1, id).bind(2, static_cast<long>(k));
-  if (!q.step()) return std::nullopt;
-  return read_snapshot(*impl_, q);
+  return impl_->call([&](StoreDb& db) -> std::optional<Snapshot> {
+    Query q(db,
+            std::string("SELECT ") + kSnapshotColumns +
+                " FROM snapshots WHERE job_id = ? ORDER BY seq LIMIT 1 OFFSET ?",
+            "cannot read a snapshot of job '" + id + "'");
+    q.bind(1, id).bind(2, static_cast<long>(k));
+    if (!q.step()) return std::nullopt;
+    return read_snapshot(db, q);
+  });
 }
 
 }  // namespace mdem::cli

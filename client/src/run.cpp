@@ -185,11 +185,10 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
     err << "mdem run: unknown job kind '" << kind << "' (allowed: twist, bundle)\n";
     return kUsage;
   }
-  for (const std::string& a : rest)
-    if (a == "--help" || a == "-h") {
-      print_run_help(out);
-      return kOk;
-    }
+  if (wants_help(rest)) {
+    print_run_help(out);
+    return kOk;
+  }
   return guarded_run(
       "mdem run bundle", [&] { return run_bundle(parse_run_options(rest), out, err); }, err);
 }

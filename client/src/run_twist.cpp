@@ -125,11 +125,10 @@ int execute(const Parsed& p, std::ostream& out, std::ostream& err) {
 }  // namespace
 
 int run_twist(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  for (const std::string& a : args)
-    if (a == "--help" || a == "-h") {
-      print_twist_help(out);
-      return kOk;
-    }
+  if (wants_help(args)) {
+    print_twist_help(out);
+    return kOk;
+  }
   Parsed p;
   try {
     p = parse_twist_args(args);

@@ -1,7 +1,9 @@
 #include "twist_spec.h"
 
 #include <cmath>
+#include <initializer_list>
 #include <sstream>
+#include <utility>
 
 #include "flags.h"
 
@@ -45,6 +47,18 @@ double number(const std::string& flag, const std::string& text) {
 
 long whole(const std::string& flag, const std::string& text) {
   return parse_integer(flag, text, -2147483648L, 2147483647L);
+}
+
+// The enum value named by a flag that takes one of a fixed set of names.
+template <class Enum>
+Enum choice(const std::string& flag, const std::string& text,
+            std::initializer_list<std::pair<const char*, Enum>> allowed) {
+  std::string names;
+  for (const auto& [name, value] : allowed) {
+    if (text == name) return value;
+    names += (names.empty() ? "" : ", ") + std::string(name);
+  }
+  throw UsageError(flag + ": '" + text + "' is not allowed (allowed: " + names + ")");
 }
 
 std::vector<std::string> split(const std::string& s, char sep) {
@@ -98,26 +112,14 @@ void apply_twist_flags(const std::map<std::string, std::string>& f, v1::JobSpec&
   if (has("--torque")) t.set_torque_nn_nm(number("--torque", val("--torque")));
   if (has("--rate")) t.set_torque_rate_nn_nm_per_ps(number("--rate", val("--rate")));
   if (has("--hold")) t.set_hold_ps(number("--hold", val("--hold")));
-  if (has("--bc")) {
-    const std::string bc = val("--bc");
-    if (bc == "constant-moment")
-      t.set_boundary(v1::CONSTANT_MOMENT);
-    else if (bc == "twist-relaxation")
-      t.set_boundary(v1::TWIST_RELAXATION);
-    else
-      throw UsageError("--bc: '" + bc +
-                       "' is not allowed (allowed: constant-moment, twist-relaxation)");
-  }
-  if (has("--grip-load")) {
-    const std::string g = val("--grip-load");
-    if (g == "rigid-grip")
-      t.set_grip_load(v1::RIGID_GRIP);
-    else if (g == "per-element")
-      t.set_grip_load(v1::PER_ELEMENT);
-    else
-      throw UsageError("--grip-load: '" + g +
-                       "' is not allowed (allowed: rigid-grip, per-element)");
-  }
+  if (has("--bc"))
+    t.set_boundary(choice<v1::TwistBoundary>(
+        "--bc", val("--bc"),
+        {{"constant-moment", v1::CONSTANT_MOMENT}, {"twist-relaxation", v1::TWIST_RELAXATION}}));
+  if (has("--grip-load"))
+    t.set_grip_load(
+        choice<v1::GripLoad>("--grip-load", val("--grip-load"),
+                             {{"rigid-grip", v1::RIGID_GRIP}, {"per-element", v1::PER_ELEMENT}}));
   if (has("--unload")) t.set_unload(true);
   if (has("--unload-hold")) t.set_unload_hold_ps(number("--unload-hold", val("--unload-hold")));
   if (has("--grip-segments"))

@@ -18,15 +18,22 @@ SqliteDb::SqliteDb(std::string path, std::string label, const char* synchronous,
       throw SqliteError(where() + ": cannot create the directory '" + parent.string() +
                         "': " + ec.message());
   }
+  // A file the user may not write is opened read-only (SQLite's READWRITE means "if possible"):
+  // it can still be read, and every write fails with SQLite's "readonly database".
   const int rc =
       sqlite3_open_v2(path_.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr);
-  if (rc != SQLITE_OK) fail("cannot open");
-  sqlite3_extended_result_codes(db_, 1);
-  sqlite3_busy_timeout(db_, busy_timeout_ms);
-  // The first statement reads the file header: a file that is not a database fails here.
-  exec("PRAGMA journal_mode=WAL", "cannot read (is it an SQLite database?)");
-  exec((std::string("PRAGMA synchronous=") + synchronous).c_str(), "cannot configure");
-  exec("PRAGMA foreign_keys=ON", "cannot configure");
+  try {
+    if (rc != SQLITE_OK) fail("cannot open");
+    sqlite3_extended_result_codes(db_, 1);
+    sqlite3_busy_timeout(db_, busy_timeout_ms);
+    // The first statement reads the file header: a file that is not a database fails here.
+    exec("PRAGMA journal_mode=WAL", "cannot read (is it an SQLite database?)");
+    exec((std::string("PRAGMA synchronous=") + synchronous).c_str(), "cannot configure");
+    exec("PRAGMA foreign_keys=ON", "cannot configure");
+  } catch (...) {
+    sqlite3_close_v2(db_);  // the destructor does not run when the constructor throws
+    throw;
+  }
 }
 
 SqliteDb::~SqliteDb() {

@@ -19,7 +19,8 @@ struct SqliteError : std::runtime_error {
 class SqliteDb {
  public:
   // Opens (creating) the file in WAL mode with foreign keys on, the given synchronous level
-  // ("NORMAL" or "FULL") and a busy timeout. Creates missing parent directories.
+  // ("NORMAL" or "FULL") and a busy timeout. Creates missing parent directories. A file the
+  // process may not write is opened read-only (readable; writes fail with SqliteError).
   SqliteDb(std::string path, std::string label, const char* synchronous = "NORMAL",
            int busy_timeout_ms = 10000);
   ~SqliteDb();
