@@ -27,6 +27,8 @@ PACKAGES=(
   clang-format           # code style (.clang-format)
   gnuplot-nox            # mdem plot
   python3                # tests: the independent reader of mdem export's files
+  zlib1g-dev             # mdemd: CRC-32 of checkpoints
+  openssl                # tests: a throwaway TLS certificate for mdemd
 )
 
 missing=()

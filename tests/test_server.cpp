@@ -372,7 +372,7 @@ TEST(Server, WatchResumesWithoutGapsOrDuplicates) {
 TEST(Server, StalledWatcherSlowsNothingAndMemoryStaysBounded) {
   DaemonProcess d(fresh_dir("stalled"));
   // A snapshot every 0.02 ps (about every step): ~50 MB of events.
-  const JobSpec spec = small_spec(60, 0.02, 0.02);
+  const JobSpec spec = small_spec(200, 0.02, 0.02);
   const std::string ref = submit_ok(d, kAliceToken, "ref", spec);
   const JobInfo ref_done = wait_finished(d, ref, 300);
   const double ref_wall =
@@ -569,6 +569,155 @@ TEST(Server, FairOrderBetweenUsersAndPerUserLimits) {
   std::sort(started.begin(), started.end());
   EXPECT_EQ(started[0].second, a1);
   EXPECT_EQ(started[1].second, b1);
+}
+
+}  // namespace
+
+namespace {
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// --tls-cert/--tls-key: a TLS client that trusts the certificate is served; a plaintext client
+// is not.
+TEST(Server, ServesTlsWhenGivenACertificate) {
+  const fs::path dir = fresh_dir("tls");
+  const std::string cmd =
+      "openssl req -x509 -newkey rsa:2048 -nodes -days 1 -subj /CN=localhost "
+      "-addext subjectAltName=DNS:localhost,IP:127.0.0.1 -keyout " +
+      (dir / "key.pem").string() + " -out " + (dir / "cert.pem").string() + " >/dev/null 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << "openssl could not make a test certificate";
+  DaemonProcess d(
+      dir, {"--tls-cert", (dir / "cert.pem").string(), "--tls-key", (dir / "key.pem").string()});
+  grpc::SslCredentialsOptions ssl;
+  ssl.pem_root_certs = slurp(dir / "cert.pem");
+  auto tls = grpc::CreateChannel(d.address(), grpc::SslCredentials(ssl));
+  auto stub = mdem::v1::JobService::NewStub(tls);
+  mdem::v1::ListJobsRequest req;
+  mdem::v1::ListJobsResponse resp;
+  auto ctx = ctx_for(kAliceToken, 10);
+  const grpc::Status ok = stub->ListJobs(ctx.get(), req, &resp);
+  EXPECT_TRUE(ok.ok()) << ok.error_message();
+  auto plain = mdem::v1::JobService::NewStub(d.channel());  // insecure
+  auto ctx2 = ctx_for(kAliceToken, 3);
+  EXPECT_FALSE(plain->ListJobs(ctx2.get(), req, &resp).ok());
+}
+
+}  // namespace
+
+namespace {
+
+struct CliResult {
+  int code;
+  std::string out;
+};
+
+CliResult mdem_cli(const fs::path& dir, const std::string& args) {
+  const std::string cmd =
+      std::string(MDEM_CLI_PATH) + " " + args + " 2>>" + (dir / "cli.err").string();
+  FILE* p = ::popen(cmd.c_str(), "r");
+  std::string out;
+  char buf[4096];
+  while (std::size_t n = std::fread(buf, 1, sizeof buf, p)) out.append(buf, n);
+  const int status = ::pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+// `mdem submit --watch` stores the daemon's results in the local database, where `mdem export`
+// reads them exactly as those of `mdem run`: the same job gives the same CSV, bit for bit.
+TEST(Server, CliSubmitWatchExportsLikeAnEmbeddedRun) {
+  const fs::path dir = fresh_dir("cli");
+  DaemonProcess d(dir);
+  std::ofstream(dir / "alice.token") << kAliceToken << "\n";
+  const std::string job =
+      "twist --layers 2 --length 13.56 --torque 2 --hold 10 --threads 1 "
+      "--temperature 300 --snapshot-every 5 ";
+  const std::string db = " --db " + (dir / "results.db").string();
+  const CliResult sub =
+      mdem_cli(dir, "submit " + job + db + " --server " + d.address() + " --token-file " +
+                        (dir / "alice.token").string() + " --watch --json");
+  ASSERT_EQ(sub.code, 0) << sub.out << slurp(dir / "cli.err");
+  const std::string remote_id = nlohmann::json::parse(sub.out)["job_id"];
+  const CliResult run = mdem_cli(dir, "run " + job + db + " --json");
+  ASSERT_EQ(run.code, 0) << slurp(dir / "cli.err");
+  const std::string local_id = nlohmann::json::parse(run.out)["job_id"];
+  for (const auto& [id, name] : {std::pair{remote_id, "remote"}, std::pair{local_id, "local"}}) {
+    ASSERT_EQ(mdem_cli(dir, "export " + id + " --format csv --out " +
+                                (dir / (std::string(name) + ".csv")).string() + db)
+                  .code,
+              0)
+        << slurp(dir / "cli.err");
+    ASSERT_EQ(mdem_cli(dir, "export " + id + " --format xyz --out " +
+                                (dir / (std::string(name) + ".xyz")).string() + db)
+                  .code,
+              0);
+  }
+  const std::string csv = slurp(dir / "remote.csv");
+  EXPECT_GT(std::count(csv.begin(), csv.end(), '\n'), 10);
+  EXPECT_EQ(csv, slurp(dir / "local.csv"));
+  EXPECT_EQ(slurp(dir / "remote.xyz"), slurp(dir / "local.xyz"));
+  // The local record knows it came from the daemon and finished.
+  const CliResult show = mdem_cli(dir, "show " + remote_id + db + " --json");
+  ASSERT_EQ(show.code, 0);
+  EXPECT_EQ(nlohmann::json::parse(show.out)["state"], "SUCCEEDED");
+}
+
+}  // namespace
+
+namespace {
+
+// Wrong, missing and huge values on the other RPCs.
+TEST(Server, RpcInputsAreCheckedWithClearStatuses) {
+  DaemonProcess d(fresh_dir("inputs"));
+  grpc::Status st;
+  get(d, kAliceToken, "", &st);
+  EXPECT_EQ(st.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(st.error_message().find("job_id"), std::string::npos);
+  get(d, kAliceToken, std::string(100000, 'j'), &st);
+  EXPECT_EQ(st.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(st.error_message().find("at most 128"), std::string::npos) << st.error_message();
+  get(d, kAliceToken, "no-such-job", &st);
+  EXPECT_EQ(st.error_code(), grpc::StatusCode::NOT_FOUND);
+  {
+    mdem::v1::CancelJobRequest req;  // no job id
+    JobInfo info;
+    auto ctx = ctx_for(kAliceToken);
+    EXPECT_EQ(d.stub()->CancelJob(ctx.get(), req, &info).error_code(),
+              grpc::StatusCode::INVALID_ARGUMENT);
+  }
+  for (int limit : {-1, 1001, std::numeric_limits<int>::max()}) {
+    mdem::v1::ListJobsRequest req;
+    req.set_limit(limit);
+    mdem::v1::ListJobsResponse resp;
+    auto ctx = ctx_for(kAliceToken);
+    const grpc::Status s = d.stub()->ListJobs(ctx.get(), req, &resp);
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << limit;
+    EXPECT_NE(s.error_message().find("limit"), std::string::npos);
+  }
+  watch(d, kAliceToken, "", 1, -1, &st);
+  EXPECT_EQ(st.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  // A spec far over gRPC's message limit never reaches the queue.
+  JobSpec huge = small_spec(5);
+  huge.set_name(std::string(5 << 20, 'x'));
+  EXPECT_EQ(submit(d, kAliceToken, "huge", huge).status.error_code(),
+            grpc::StatusCode::RESOURCE_EXHAUSTED);
+  // Non-finite and negative run settings.
+  JobSpec bad = small_spec(5);
+  bad.mutable_run()->set_dt_ps(std::numeric_limits<double>::infinity());
+  bad.mutable_outputs()->set_energy_every_ps(-1);
+  const Submitted s = submit(d, kAliceToken, "bad", bad);
+  EXPECT_EQ(s.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(s.status.error_message().find("run.dt_ps"), std::string::npos);
+  EXPECT_NE(s.status.error_message().find("outputs.energy_every_ps"), std::string::npos);
+  mdem::v1::ListJobsRequest lreq;
+  mdem::v1::ListJobsResponse lresp;
+  auto ctx = ctx_for(kAliceToken);
+  ASSERT_TRUE(d.stub()->ListJobs(ctx.get(), lreq, &lresp).ok());
+  EXPECT_EQ(lresp.jobs_size(), 0);
 }
 
 }  // namespace

@@ -42,6 +42,11 @@ Status JobServiceImpl::authenticate(const grpc::ServerContext* ctx, Identity& wh
 
 Status JobServiceImpl::visible_job(const Identity& who, const std::string& id, JobRow& row) {
   if (id.empty()) return Status(StatusCode::INVALID_ARGUMENT, "job_id: required");
+  constexpr std::size_t kMaxIdLength = 128;  // job ids are far shorter; never echo a huge one
+  if (id.size() > kMaxIdLength)
+    return Status(StatusCode::INVALID_ARGUMENT, "job_id: " + std::to_string(id.size()) +
+                                                    " characters; at most " +
+                                                    std::to_string(kMaxIdLength) + " allowed");
   auto r = store_.get(id);
   if (!r) return Status(StatusCode::NOT_FOUND, "no job '" + id + "'");
   if (r->user != who.user && !who.admin)
