@@ -40,6 +40,7 @@
 #include <thread>
 #include <vector>
 
+#include "daemon.h"
 #include "mdem/cli.h"
 #include "mdem/v1/service.grpc.pb.h"
 
@@ -49,8 +50,6 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 using Json = nlohmann::ordered_json;
 using mdem::v1::JobEvent;
-
-const char* kToken = "bench-token-0123456789abcdef";
 
 double ms_since(Clock::time_point t0, Clock::time_point t = Clock::now()) {
   return std::chrono::duration<double, std::milli>(t - t0).count();
@@ -139,99 +138,10 @@ Options parse_options(int argc, char** argv) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The daemon
+// The daemon: the service tests' harness (a real mdemd on port 0 in a temp directory).
 
-int spawn(const std::vector<std::string>& args, const fs::path& log) {
-  const int pid = ::fork();
-  if (pid == 0) {
-    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-    ::dup2(fd, 1);
-    ::dup2(fd, 2);
-    std::vector<char*> argv;
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  return pid;
-}
-
-class Daemon {
- public:
-  Daemon(const fs::path& dir, const Options& o) : dir_(dir) {
-    std::ofstream(dir_ / "tokens") << kToken << " bench\n";
-    const fs::path port_file = dir_ / "port";
-    pid_ = spawn(
-        {MDEMD_PATH, "--listen", "127.0.0.1:0", "--data-dir", (dir_ / "data").string(),
-         "--token-file", (dir_ / "tokens").string(), "--port-file", port_file.string(), "--workers",
-         std::to_string(o.workers), "--threads-per-job", std::to_string(o.threads_per_job)},
-        dir_ / "mdemd.log");
-    for (int i = 0; i < 600 && !fs::exists(port_file); ++i) {
-      int status = 0;
-      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
-        pid_ = -1;
-        throw std::runtime_error("mdemd exited at start; see " + (dir_ / "mdemd.log").string());
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    std::ifstream(port_file) >> port_;
-    if (port_ <= 0) throw std::runtime_error("mdemd did not write its port");
-    channel_ = new_channel();
-  }
-  ~Daemon() { stop(); }
-  void stop() {
-    if (pid_ <= 0) return;
-    ::kill(pid_, SIGTERM);
-    for (int i = 0; i < 1500; ++i) {
-      if (::waitpid(pid_, nullptr, WNOHANG) == pid_) {
-        pid_ = -1;
-        return;
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    ::kill(pid_, SIGKILL);
-    ::waitpid(pid_, nullptr, 0);
-    pid_ = -1;
-  }
-  // A connected channel of its own (its own TCP connection, not shared with other channels).
-  std::shared_ptr<grpc::Channel> new_channel() const {
-    grpc::ChannelArguments args;
-    args.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
-    args.SetMaxReceiveMessageSize(64 << 20);
-    auto ch = grpc::CreateCustomChannel("127.0.0.1:" + std::to_string(port_),
-                                        grpc::InsecureChannelCredentials(), args);
-    if (!ch->WaitForConnected(std::chrono::system_clock::now() + std::chrono::seconds(10)))
-      throw std::runtime_error("cannot connect to mdemd");
-    return ch;
-  }
-  std::shared_ptr<grpc::Channel> channel() const { return channel_; }
-  int pid() const { return pid_; }
-  // User + system CPU seconds of the daemon so far (/proc/PID/stat).
-  double cpu_s() const {
-    std::ifstream in("/proc/" + std::to_string(pid_) + "/stat");
-    std::string s((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    std::istringstream rest(s.substr(s.rfind(')') + 2));
-    std::string f;
-    double ut = 0, st = 0;
-    for (int k = 3; k <= 15 && rest >> f; ++k) {
-      if (k == 14) ut = std::stod(f);
-      if (k == 15) st = std::stod(f);
-    }
-    return (ut + st) / static_cast<double>(::sysconf(_SC_CLK_TCK));
-  }
-  long rss_kb() const {
-    std::ifstream in("/proc/" + std::to_string(pid_) + "/status");
-    std::string line;
-    while (std::getline(in, line))
-      if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
-    return -1;
-  }
-
- private:
-  fs::path dir_;
-  int pid_ = -1, port_ = 0;
-  std::shared_ptr<grpc::Channel> channel_;
-};
+using Daemon = mdem::testing::DaemonProcess;
+const char* kToken = mdem::testing::kAliceToken;
 
 std::unique_ptr<grpc::ClientContext> ctx(double deadline_s = 60) {
   auto c = std::make_unique<grpc::ClientContext>();
@@ -584,24 +494,6 @@ Json part_fan_out(Daemon& d, const Options& o) {
 // ---------------------------------------------------------------------------------------------
 // 3. Daemon overhead against the in-process run
 
-int run_to_file(const std::vector<std::string>& args, const fs::path& out) {
-  const int pid = ::fork();
-  if (pid == 0) {
-    const int fd = ::open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    const int null = ::open("/dev/null", O_WRONLY);
-    ::dup2(fd, 1);
-    ::dup2(null, 2);
-    std::vector<char*> argv;
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
 Json part_overhead(Daemon& d, const Options& o, const fs::path& dir) {
   TwistParams p;
   if (o.quick) {  // 19 tubes x 20 segments = 380 elements, 20 ps ramp + 30 ps hold
@@ -635,7 +527,7 @@ Json part_overhead(Daemon& d, const Options& o, const fs::path& dir) {
   } else {
     std::vector<std::string> argv = {MDEM_CLI_PATH, "run"};
     argv.insert(argv.end(), args.begin(), args.end());
-    rc = run_to_file(argv, dir / "embedded.json");
+    rc = Daemon::run(argv, dir / "embedded.json");
     std::ifstream in(dir / "embedded.json");
     out_text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   }
@@ -720,7 +612,8 @@ int main(int argc, char** argv) {
     doc["threads_per_job"] = o.threads_per_job;
     doc["quick"] = o.quick;
     doc["load_start"] = loadavg();
-    Daemon d(dir, o);
+    Daemon d(dir, {"--workers", std::to_string(o.workers), "--threads-per-job",
+                   std::to_string(o.threads_per_job)});
     // Warm the connection so part 1 times no connection setup.
     {
       mdem::v1::ListJobsRequest req;
@@ -737,7 +630,7 @@ int main(int argc, char** argv) {
       failures += doc["fan_out"]["failures"].get<int>();
     }
     if (o.only.find('3') != std::string::npos) doc["overhead"] = part_overhead(d, o, dir);
-    d.stop();
+    d.terminate();
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_service: error: %s (daemon log in %s)\n", e.what(),
                  (dir / "mdemd.log").c_str());

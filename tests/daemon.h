@@ -11,6 +11,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -124,13 +125,16 @@ class DaemonProcess {
     return -1;
   }
 
-  // Runs a program with stdout+stderr to `log`; returns its pid.
-  static int spawn(const std::vector<std::string>& args, const fs::path& log) {
+  // Runs a program with stdout to `out` (appended, or truncated with `truncate`) and stderr to
+  // `err` (the same file when empty); returns its pid.
+  static int spawn(const std::vector<std::string>& args, const fs::path& out,
+                   const fs::path& err = {}, bool truncate = false) {
     const int pid = ::fork();
     if (pid == 0) {
-      const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+      const int fd =
+          ::open(out.c_str(), O_WRONLY | O_CREAT | (truncate ? O_TRUNC : O_APPEND), 0644);
       ::dup2(fd, 1);
-      ::dup2(fd, 2);
+      ::dup2(err.empty() ? fd : ::open(err.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644), 2);
       std::vector<char*> argv;
       for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
       argv.push_back(nullptr);
@@ -138,6 +142,37 @@ class DaemonProcess {
       ::_exit(127);
     }
     return pid;
+  }
+  // spawn, then wait: the exit status (-1 when killed by a signal).
+  static int run(const std::vector<std::string>& args, const fs::path& out,
+                 const fs::path& err = "/dev/null") {
+    int status = 0;
+    ::waitpid(spawn(args, out, err, true), &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+
+  // A connected channel with its own TCP connection (not shared with other channels).
+  std::shared_ptr<grpc::Channel> new_channel() const {
+    grpc::ChannelArguments args;
+    args.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
+    args.SetMaxReceiveMessageSize(64 << 20);
+    auto ch = grpc::CreateCustomChannel(address(), grpc::InsecureChannelCredentials(), args);
+    if (!ch->WaitForConnected(std::chrono::system_clock::now() + std::chrono::seconds(10)))
+      throw std::runtime_error("cannot connect to mdemd at " + address());
+    return ch;
+  }
+  // User + system CPU seconds of the daemon so far (/proc/PID/stat, fields 14 and 15).
+  double cpu_s() const {
+    std::ifstream in("/proc/" + std::to_string(pid_) + "/stat");
+    std::string s((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::istringstream rest(s.substr(s.rfind(')') + 2));
+    std::string f;
+    double ut = 0, st = 0;
+    for (int k = 3; k <= 15 && rest >> f; ++k) {
+      if (k == 14) ut = std::stod(f);
+      if (k == 15) st = std::stod(f);
+    }
+    return (ut + st) / static_cast<double>(::sysconf(_SC_CLK_TCK));
   }
 
  private:
