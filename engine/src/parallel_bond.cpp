@@ -170,41 +170,31 @@ void ParallelBond::compute(const Elements& el, const NeighborList*, ForceSink& s
     const int tid = omp_get_thread_num();
     Vec3* f = sink.force(tid);
     Vec3* t = sink.torque(tid);
-    double e_ten = 0, e_sh = 0, e_be = 0, e_to = 0;
+    BondTally tally;
 #pragma omp for schedule(static)
     for (std::size_t k = 0; k < nb; ++k) {
       const Bond& b = bonds_[k];
-      const BondResult r = bond_eval(b, x[b.i], q[b.i], x[b.j], q[b.j]);
-      f[b.i] += r.fi;
-      f[b.j] += r.fj;
-      t[b.i] += r.ti;
-      t[b.j] += r.tj;
-      e_ten += r.e_tension;
-      e_sh += r.e_shear;
-      e_be += r.e_bending;
-      e_to += r.e_torsion;
+      tally.apply(bond_eval(b, x[b.i], q[b.i], x[b.j], q[b.j]), b.i, b.j, f, t);
     }
-    EnergyTally& e = sink.energy(tid);
-    e.add(EnergyTerm::BondTension, e_ten);
-    e.add(EnergyTerm::BondShear, e_sh);
-    e.add(EnergyTerm::BondBending, e_be);
-    e.add(EnergyTerm::BondTorsion, e_to);
+    tally.add_to(sink.energy(tid));
   }
 }
 
+void add_bond_stiffness(const Bond& b, StiffnessSums& s) {
+  const BondStiffness& k = b.k;
+  const double kt = std::max(k.kn_area, k.ks_area);
+  const double krot = std::max(k.kn_inertia, k.ks_polar);
+  const double ai = b.ci.norm(), aj = b.cj.norm();
+  s.kt[b.i] += kt;
+  s.kt[b.j] += kt;
+  s.kr[b.i] += krot + k.ks_area * ai * ai;
+  s.kr[b.j] += krot + k.ks_area * aj * aj;
+  s.ktr[b.i] += k.ks_area * ai;
+  s.ktr[b.j] += k.ks_area * aj;
+}
+
 void ParallelBond::add_stiffness(const Elements&, const NeighborList*, StiffnessSums& s) const {
-  for (const Bond& b : bonds_) {
-    const BondStiffness& k = b.k;
-    const double kt = std::max(k.kn_area, k.ks_area);
-    const double krot = std::max(k.kn_inertia, k.ks_polar);
-    const double ai = b.ci.norm(), aj = b.cj.norm();
-    s.kt[b.i] += kt;
-    s.kt[b.j] += kt;
-    s.kr[b.i] += krot + k.ks_area * ai * ai;
-    s.kr[b.j] += krot + k.ks_area * aj * aj;
-    s.ktr[b.i] += k.ks_area * ai;
-    s.ktr[b.j] += k.ks_area * aj;
-  }
+  for (const Bond& b : bonds_) add_bond_stiffness(b, s);
 }
 
 }  // namespace mdem

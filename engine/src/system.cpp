@@ -402,7 +402,10 @@ void System::run(long nsteps) {
                            steps_, bad);
 
     ledger_.external_work += work;
-    ledger_.dissipated += diss;
+    // Damping, plus the stored energy the models released for good in this step's evaluation
+    // (plastic flow, bonds breaking). Only evaluations inside run() count: initialize() resets
+    // the books, and refresh() follows edits the ledger cannot account for.
+    ledger_.dissipated += diss + ledger_.potential.released;
     update_kinetic();
     if (steps_ % settings_.guard_every == 0) check_energy_growth();
   }

@@ -87,6 +87,8 @@ void save_ledger(StateWriter& w, const EnergyLedger& L) {
 void load_ledger(StateReader& r, EnergyLedger& L) {
   r.begin("energy");
   L.potential.stored = r.get<decltype(L.potential.stored)>("potential");
+  // What the last evaluation released was booked into `dissipated` then; it is not state.
+  L.potential.released = 0;
   L.kinetic_translational = r.get<double>("kinetic_translational");
   L.kinetic_rotational = r.get<double>("kinetic_rotational");
   L.external_work = r.get<double>("external_work");

@@ -11,7 +11,9 @@
 
 namespace mdem {
 
-enum class ElementKind : std::uint8_t { CntSegment = 0, Nanoparticle = 1, Grain = 2 };
+// Wall: a rigid flat platen (granular scenes): its plane passes through x with unit normal body
+// z (q * UnitZ), pointing towards the material; it moves only as prescribed.
+enum class ElementKind : std::uint8_t { CntSegment = 0, Nanoparticle = 1, Grain = 2, Wall = 3 };
 
 // How one degree of freedom moves. Translational DOFs are world x, y, z; rotational DOFs are
 // rotations about world x, y, z.

@@ -24,6 +24,11 @@ inline constexpr std::array<std::string_view, kEnergyTermCount> kEnergyTermNames
 // Potential energies of one force evaluation, by component.
 struct EnergyTally {
   std::array<double, kEnergyTermCount> stored{};
+  // Stored energy a model removed for good in this evaluation by an irreversible event (plastic
+  // flow of a bond: capped force × plastic slip; a bond breaking: its energy less that of the
+  // contact replacing it). The system books it as dissipated during run(); it is zero when the
+  // state did not change since the last evaluation.
+  double released = 0;
 
   void add(EnergyTerm t, double e) { stored[static_cast<int>(t)] += e; }
   double total_stored() const {
@@ -33,6 +38,7 @@ struct EnergyTally {
   }
   EnergyTally& operator+=(const EnergyTally& o) {
     for (int k = 0; k < kEnergyTermCount; ++k) stored[k] += o.stored[k];
+    released += o.released;
     return *this;
   }
 };
@@ -43,7 +49,7 @@ struct EnergyLedger {
   double kinetic_translational = 0;
   double kinetic_rotational = 0;
   double external_work = 0;  // work done on the system by external loads and constraints
-  double dissipated = 0;     // energy removed by damping (≥ 0)
+  double dissipated = 0;     // removed by damping, plus stored energy released (EnergyTally)
   double initial_total = 0;  // stored + kinetic at step 0
 
   double kinetic() const { return kinetic_translational + kinetic_rotational; }

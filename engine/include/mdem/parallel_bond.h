@@ -57,6 +57,32 @@ BondDeformation bond_deformation(const Bond& b, const Vec3& xi, const Quat& qi, 
                                  const Quat& qj);
 BondResult bond_eval(const Bond& b, const Vec3& xi, const Quat& qi, const Vec3& xj, const Quat& qj);
 
+// A thread's running sums of bond results (ParallelBond, GrainBond): apply() adds a result's
+// forces and moments on i and j to the thread's buffers and its energies to the four bond terms;
+// add_to() hands the energies to the thread's tally.
+struct BondTally {
+  double tension = 0, shear = 0, bending = 0, torsion = 0;
+  void apply(const BondResult& r, std::uint32_t i, std::uint32_t j, Vec3* f, Vec3* t) {
+    f[i] += r.fi;
+    f[j] += r.fj;
+    t[i] += r.ti;
+    t[j] += r.tj;
+    tension += r.e_tension;
+    shear += r.e_shear;
+    bending += r.e_bending;
+    torsion += r.e_torsion;
+  }
+  void add_to(EnergyTally& e) const {
+    e.add(EnergyTerm::BondTension, tension);
+    e.add(EnergyTerm::BondShear, shear);
+    e.add(EnergyTerm::BondBending, bending);
+    e.add(EnergyTerm::BondTorsion, torsion);
+  }
+};
+
+// Adds an intact bond's stiffness to the stable-time-step sums of its two elements.
+void add_bond_stiffness(const Bond& b, StiffnessSums& s);
+
 class ParallelBond final : public ForceModel {
  public:
   std::string_view name() const override { return "parallel_bond"; }
