@@ -1,11 +1,92 @@
 #pragma once
-// Helpers shared by the system-level tests.
+// Helpers shared by the tests: temporary directories and files, the in-process CLI, and the
+// system-level checks (static equilibrium).
+#include <stdlib.h>
+#include <sys/wait.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <system_error>
+#include <vector>
 
+#include "mdem/cli.h"
 #include "mdem/system.h"
 
 namespace mdem::testing {
+
+// A fresh directory under the system's temp directory (PREFIX-XXXXXX), removed with its contents
+// at the end of the scope.
+class TempDir {
+ public:
+  explicit TempDir(const std::string& prefix) {
+    std::string tmpl = (std::filesystem::temp_directory_path() / (prefix + "-XXXXXX")).string();
+    path_ = mkdtemp(tmpl.data());
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// The whole content of a file (empty when it cannot be read).
+inline std::string slurp(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+inline bool contains(const std::string& s, const std::string& part) {
+  return s.find(part) != std::string::npos;
+}
+
+// What a CLI call gave: its exit code, standard output and standard error.
+struct CliResult {
+  int code = -1;
+  std::string out, err;
+};
+
+// Runs a shell command: its exit code (-1 when a signal ended it) and standard output.
+inline CliResult run_shell(const std::string& cmd) {
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  CliResult r;
+  char buf[4096];
+  while (std::size_t n = std::fread(buf, 1, sizeof buf, pipe)) r.out.append(buf, n);
+  const int status = ::pclose(pipe);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+// In-process `mdem run KIND ARGS`.
+inline CliResult run_job(const std::string& kind, std::vector<std::string> args) {
+  args.insert(args.begin(), kind);
+  std::ostringstream out, err;
+  const int code = cli::run(args, out, err);
+  return {code, out.str(), err.str()};
+}
+
+// base plus more; a flag in `more` replaces the same flag (and its value) in base.
+inline std::vector<std::string> with(std::vector<std::string> base,
+                                     const std::vector<std::string>& more) {
+  for (std::size_t k = 0; k < more.size(); ++k) {
+    if (more[k].rfind("--", 0) != 0) continue;
+    auto it = std::find(base.begin(), base.end(), more[k]);
+    if (it != base.end()) base.erase(it, it + 2);
+  }
+  base.insert(base.end(), more.begin(), more.end());
+  return base;
+}
 
 // Largest unbalanced force (eV/nm) and moment (eV) on free DOFs: internal + external.
 inline double max_unbalanced(const System& sys) {

@@ -80,8 +80,11 @@ JobRunResult run_job(Job& job, const JobCadence& cadence, const JobObserver& obs
   auto report = [&](long step) {
     if (obs.frame && frame_every && (step % frame_every == 0 || step == total))
       obs.frame({step, sys.time(), job.observe()});
-    if (obs.snapshot && snap_every && (step % snap_every == 0 || step == total))
-      obs.snapshot(capture_snapshot(sys.elements(), step, sys.time()));
+    if (obs.snapshot && snap_every && (step % snap_every == 0 || step == total)) {
+      Snapshot snap = capture_snapshot(sys.elements(), step, sys.time());
+      job.decorate(snap);
+      obs.snapshot(snap);
+    }
     if (obs.progress && (step % progress_every == 0 || step == total))
       obs.progress({step, total, sys.time(), job.phase()});
   };

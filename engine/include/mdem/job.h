@@ -34,6 +34,9 @@ class Job {
   virtual Summary summary() = 0;
   // A few words on where the protocol is ("loading", "holding"), for progress lines.
   virtual std::string phase() const { return {}; }
+  // Adds the job's own per-element values for colouring (e.g. a slip vector) to a snapshot that
+  // run_job captured at the current state.
+  virtual void decorate(Snapshot&) const {}
 
   // Checkpoints: the system and every bit of protocol and observer state a run changes, so that
   // a job built anew from the same spec, with the same thread count, and loaded from the bytes,

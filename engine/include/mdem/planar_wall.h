@@ -1,0 +1,34 @@
+#pragma once
+// Linear frictionless contact between grains and flat platens (ElementKind::Wall elements):
+// u_n = R − d, d the distance from the grain centre to the platen plane (along its normal),
+// F = k_n·u_n along the normal when u_n > 0, nothing otherwise. The thesis's Eq. 36 with a wall
+// of infinite radius gives L = ∞; this engine takes the rigid-platen limit of the same neck
+// model: k_n = π·R²·E_grain/R = π·R·E_grain (L = R, the wall adds no compliance). Energy
+// EnergyTerm::Contact. The reaction on the platen goes to the platen element, so a protocol reads
+// the platen force from System's forces and the system books the work of its prescribed motion.
+#include <vector>
+
+#include "mdem/force_model.h"
+
+namespace mdem {
+
+class PlanarWallContact final : public ForceModel {
+ public:
+  explicit PlanarWallContact(double youngs);
+  std::string_view name() const override { return "planar_wall_contact"; }
+  void compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const override;
+  void add_stiffness(const Elements& el, const NeighborList* pairs,
+                     StiffnessSums& s) const override;
+  double stiffness(double radius) const;
+
+ private:
+  void find_walls(const Elements& el) const;
+
+  double youngs_;
+  // Platen indices, found at first use (elements are not added after a system starts; a changed
+  // element count triggers a new scan).
+  mutable std::vector<std::size_t> walls_;
+  mutable std::size_t scanned_ = static_cast<std::size_t>(-1);
+};
+
+}  // namespace mdem

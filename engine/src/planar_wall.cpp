@@ -1,0 +1,86 @@
+// Grain–platen contact: linear, frictionless, rigid-platen limit of Eq. 36 (planar_wall.h).
+#include "mdem/planar_wall.h"
+
+#include <omp.h>
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+namespace mdem {
+
+PlanarWallContact::PlanarWallContact(double youngs) : youngs_(youngs) {
+  if (!std::isfinite(youngs) || youngs <= 0)
+    throw std::invalid_argument("planar wall contact: youngs must be finite and > 0, got " +
+                                std::to_string(youngs));
+}
+
+double PlanarWallContact::stiffness(double radius) const {
+  return std::numbers::pi * radius * youngs_;
+}
+
+void PlanarWallContact::find_walls(const Elements& el) const {
+  if (scanned_ == el.size()) return;
+  walls_.clear();
+  for (std::size_t i = 0; i < el.size(); ++i)
+    if (el.kind[i] == ElementKind::Wall) walls_.push_back(i);
+  scanned_ = el.size();
+}
+
+void PlanarWallContact::compute(const Elements& el, const NeighborList*, ForceSink& sink) const {
+  find_walls(el);
+  if (walls_.empty()) return;
+  const long n = static_cast<long>(el.size());
+  const std::size_t nw = walls_.size();
+  // Each platen's plane: a point and the unit normal towards the material.
+  std::vector<Vec3> point(nw), normal(nw);
+  for (std::size_t w = 0; w < nw; ++w) {
+    point[w] = el.x[walls_[w]];
+    normal[w] = (el.q[walls_[w]] * Vec3::UnitZ()).normalized();
+  }
+#pragma omp parallel num_threads(sink.threads()) if (n >= kParallelMinItems)
+  {
+    const int tid = omp_get_thread_num();
+    Vec3* f = sink.force(tid);
+    double energy = 0;
+#pragma omp for schedule(static)
+    for (long i = 0; i < n; ++i) {
+      if (el.kind[i] != ElementKind::Grain) continue;
+      const double R = el.radius[i];
+      for (std::size_t w = 0; w < nw; ++w) {
+        const double u = R - normal[w].dot(el.x[i] - point[w]);
+        if (u <= 0) continue;
+        const double k = stiffness(R);
+        const Vec3 F = (k * u) * normal[w];
+        f[i] += F;
+        // The reaction on the platen: a force only (its rotation is never free), so the system
+        // books the work of its prescribed motion and a protocol reads the platen force.
+        f[walls_[w]] -= F;
+        energy += 0.5 * k * u * u;
+      }
+    }
+    sink.energy(tid).add(EnergyTerm::Contact, energy);
+  }
+}
+
+void PlanarWallContact::add_stiffness(const Elements& el, const NeighborList*,
+                                      StiffnessSums& s) const {
+  find_walls(el);
+  for (std::size_t w : walls_) {
+    const Vec3 p = el.x[w];
+    const Vec3 nrm = (el.q[w] * Vec3::UnitZ()).normalized();
+    for (std::size_t i = 0; i < el.size(); ++i) {
+      if (el.kind[i] != ElementKind::Grain) continue;
+      const double R = el.radius[i];
+      // Grains within a diameter of touching the platen: those it meets first as it advances (the
+      // ones behind are shielded by them).
+      if (nrm.dot(el.x[i] - p) >= 3.0 * R) continue;
+      // A platen moves as prescribed: its spring adds k/m to the grain's ω² with no coupling
+      // block, and the system doubles kt for the coupling of free pairs, hence k/2.
+      s.kt[i] += 0.5 * stiffness(R);
+    }
+  }
+}
+
+}  // namespace mdem
