@@ -13,21 +13,18 @@
 #include "../client/src/results_store.h"
 #include "mdem/cli.h"
 #include "mdem/spec.h"
+#include "support.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int code;
-  std::string out, err;
-};
+using mdem::testing::with;
+using Result = mdem::testing::CliResult;
 
+// In-process `mdem run twist ARGS`.
 Result run(std::vector<std::string> args) {
-  args.insert(args.begin(), "twist");
-  std::ostringstream out, err;
-  const int code = mdem::cli::run(args, out, err);
-  return {code, out.str(), err.str()};
+  return mdem::testing::run_job("twist", std::move(args));
 }
 
 fs::path temp_dir() {
@@ -39,17 +36,6 @@ fs::path temp_dir() {
 const std::vector<std::string> kSmall = {"--layers",  "2", "--length",         "8",
                                          "--torque",  "1", "--hold",           "1",
                                          "--threads", "1", "--snapshot-every", "1"};
-
-// base plus more; a flag in `more` replaces the same flag (and its value) in base.
-std::vector<std::string> with(std::vector<std::string> base, std::vector<std::string> more) {
-  for (std::size_t k = 0; k < more.size(); ++k) {
-    if (more[k].rfind("--", 0) != 0) continue;
-    auto it = std::find(base.begin(), base.end(), more[k]);
-    if (it != base.end()) base.erase(it, it + 2);
-  }
-  base.insert(base.end(), more.begin(), more.end());
-  return base;
-}
 
 TEST(CliTwist, SmallJobReportsJsonAndStoresItsResults) {
   const std::string db = (temp_dir() / "ok.db").string();
@@ -212,10 +198,16 @@ TEST(CliTwist, UnwritableDatabaseFailsTheJobWithItsPath) {
 
 }  // namespace
 
-// The example specs shipped in examples/ stay valid (loaded and validated, not run).
+// Every example spec shipped in examples/ (of any kind) stays valid: loaded and validated, not
+// run.
 TEST(CliTwist, ShippedExampleSpecsAreValid) {
-  for (const char* f : {"twist_table4-1.yaml", "twist_defects.json"}) {
-    const fs::path p = fs::path(MDEM_SOURCE_DIR) / "examples" / f;
-    EXPECT_NO_THROW(mdem::spec::finalize(mdem::spec::load_file(p.string()))) << f;
+  int specs = 0;
+  for (const auto& entry : fs::directory_iterator(fs::path(MDEM_SOURCE_DIR) / "examples")) {
+    const std::string ext = entry.path().extension().string();
+    if (ext != ".yaml" && ext != ".yml" && ext != ".json") continue;
+    ++specs;
+    EXPECT_NO_THROW(mdem::spec::finalize(mdem::spec::load_file(entry.path().string())))
+        << entry.path();
   }
+  EXPECT_GE(specs, 4);  // twist_table4-1, twist_defects, compression-au-shell, compression-cds
 }

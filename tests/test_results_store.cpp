@@ -2,7 +2,6 @@
 // non-finite values, and clear errors for unwritable, corrupt, foreign or newer database files.
 #include <gtest/gtest.h>
 #include <sqlite3.h>
-#include <stdlib.h>
 
 #include <bit>
 #include <cmath>
@@ -16,6 +15,7 @@
 #include <set>
 
 #include "../client/src/results_store.h"
+#include "support.h"
 
 namespace {
 
@@ -31,20 +31,9 @@ using mdem::cli::StoreError;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-class TempDir {
- public:
-  TempDir() {
-    std::string tmpl = (fs::temp_directory_path() / "mdem-store-test-XXXXXX").string();
-    path_ = mkdtemp(tmpl.data());
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  fs::path path_;
+// A fresh temp directory for one test.
+struct TempDir : mdem::testing::TempDir {
+  TempDir() : mdem::testing::TempDir("mdem-store-test") {}
 };
 
 JobRecord make_job(const std::string& id, const std::string& created = "") {

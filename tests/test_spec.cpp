@@ -10,57 +10,17 @@
 #include <vector>
 
 #include "mdem/spec.h"
+#include "spec_support.h"
 
 using google::protobuf::util::MessageDifferencer;
 using mdem::spec::FieldError;
 using mdem::spec::SpecError;
+using namespace mdem::testing;
 using mdem::v1::JobSpec;
 
 namespace {
 
 namespace fs = std::filesystem;
-
-// The errors of finalize(parse(text)), or of the parser if it refuses the text; empty if valid.
-template <typename Parse>
-std::vector<FieldError> errors_of(Parse parse, const std::string& text) {
-  try {
-    mdem::spec::finalize(parse(text));
-    return {};
-  } catch (const SpecError& e) {
-    return e.errors();
-  }
-}
-
-std::vector<FieldError> json_errors(const std::string& json) {
-  return errors_of(mdem::spec::parse_json, json);
-}
-std::vector<FieldError> yaml_errors(const std::string& yaml) {
-  return errors_of(mdem::spec::parse_yaml, yaml);
-}
-
-std::string describe(const std::vector<FieldError>& errors) {
-  std::string s;
-  for (const FieldError& e : errors) s += "\n  " + e.field + ": " + e.message;
-  return s.empty() ? " (none)" : s;
-}
-
-// Exactly one error, on `field`, whose message contains each of `parts`.
-void expect_one_error(const std::vector<FieldError>& errors, const std::string& field,
-                      const std::vector<std::string>& parts) {
-  ASSERT_EQ(errors.size(), 1u) << "errors:" << describe(errors);
-  EXPECT_EQ(errors[0].field, field);
-  for (const std::string& part : parts)
-    EXPECT_NE(errors[0].message.find(part), std::string::npos)
-        << "message \"" << errors[0].message << "\" lacks \"" << part << "\"";
-}
-
-std::string replace_value(std::string text, const std::string& value) {
-  return text.replace(text.find('$'), 1, value);
-}
-
-JobSpec finalized_json(const std::string& json) {
-  return mdem::spec::finalize(mdem::spec::parse_json(json));
-}
 
 // ---- defaults ----
 
@@ -136,16 +96,6 @@ TEST(SpecDefaults, ApplyDefaultsWithoutKindFillsRunAndOutputsOnly) {
 }
 
 // ---- validation of each field ----
-
-// A JSON spec with "$" where the value goes, the field path the error must name, values out of
-// range on each side (and other wrong values), and the text of the allowed range.
-struct FieldCase {
-  std::string json;
-  std::string field;
-  std::vector<std::string> bad;
-  std::string allowed;
-  bool real = true;  // a double: also test non-finite values
-};
 
 const std::vector<FieldCase>& field_cases() {
   static const std::vector<FieldCase> cases = {
@@ -278,14 +228,7 @@ TEST(SpecValidate, EachDoubleFieldRefusesNonFiniteJsonStrings) {
 
 // JSON is YAML's flow style, so the same templates read as YAML with YAML's special floats.
 TEST(SpecValidate, EachDoubleFieldRefusesNonFiniteYamlFloats) {
-  for (const FieldCase& c : field_cases()) {
-    if (!c.real) continue;
-    for (const std::string value : {".nan", ".inf", "-.inf", ".NaN", "+.Inf"}) {
-      SCOPED_TRACE(c.field + " = " + value);
-      expect_one_error(yaml_errors(replace_value(c.json, value)), c.field,
-                       {"is not a finite number", c.allowed});
-    }
-  }
+  expect_yaml_non_finite_refused(field_cases(), {".nan", ".inf", "-.inf", ".NaN", "+.Inf"});
 }
 
 TEST(SpecValidate, WrongTypeIsRefusedByTheParser) {
@@ -380,7 +323,7 @@ TEST(SpecValidate, SpecErrorWhatListsEveryErrorOnItsOwnLine) {
 }
 
 TEST(SpecValidate, MissingKindIsAnError) {
-  expect_one_error(json_errors("{}"), "kind", {"no job kind given (allowed: twist)"});
+  expect_one_error(json_errors("{}"), "kind", {"no job kind given (allowed: twist, compression)"});
   expect_one_error(json_errors(R"({"name":"x", "run":{"threads":1}})"), "kind", {"twist"});
 }
 

@@ -142,6 +142,21 @@ void print_report(std::ostream& out, std::ostream& err, const json& doc,
           << scalar(s["length_nm"]) << " nm\n"
           << "  grip torque " << scalar(s["applied_torque_nNnm"]) << " nN·nm applied, "
           << scalar(s["grip_reaction_nNnm"]) << " nN·nm reaction\n";
+    } else if (has_all(s, {"grains", "bonds", "porosity", "peak_force_nN",
+                           "peak_force_displacement_nm", "loading_stiffness_nN_per_nm",
+                           "final_force_nN", "final_displacement_nm", "bonds_yielded",
+                           "bonds_broken", "fragments", "slip_max_nm", "slip_mean_nm"})) {
+      out << "  " << scalar(s["grains"]) << " grains, " << scalar(s["bonds"]) << " bonds, porosity "
+          << scalar(s["porosity"]) << "\n"
+          << "  peak force " << scalar(s["peak_force_nN"])
+          << " nN at h = " << scalar(s["peak_force_displacement_nm"]) << " nm, loading stiffness "
+          << scalar(s["loading_stiffness_nN_per_nm"]) << " nN/nm; at the end "
+          << scalar(s["final_force_nN"]) << " nN at h = " << scalar(s["final_displacement_nm"])
+          << " nm\n"
+          << "  bonds yielded " << scalar(s["bonds_yielded"]) << ", broken "
+          << scalar(s["bonds_broken"]) << "; fragments " << scalar(s["fragments"])
+          << "; grain slip max " << scalar(s["slip_max_nm"]) << " nm, mean "
+          << scalar(s["slip_mean_nm"]) << " nm\n";
     } else if (s.is_object() && !s.empty()) {
       out << "  summary " << s.dump() << "\n";
     }

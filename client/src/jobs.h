@@ -7,10 +7,13 @@
 
 #include "flags.h"
 #include "mdem/system.h"
+#include "spec_flags.h"
 
 namespace mdem::cli {
 
-int run_twist(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+// `mdem run <kind>` for a kind built from a job spec (spec_kinds(): twist, compression).
+int run_spec_kind(const SpecKind& kind, const std::vector<std::string>& args, std::ostream& out,
+                  std::ostream& err);
 
 // Runs one `mdem run <kind>` body and turns what it throws into an exit code and a message
 // prefixed with `command`: a bad flag (UsageError) or an impossible setting (ConfigError,

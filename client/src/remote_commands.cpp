@@ -15,9 +15,10 @@
 #include "mdem/cli.h"
 #include "mdem/snapshot_proto.h"
 #include "mdem/spec.h"
+#include "mdem/spec_job.h"
 #include "remote.h"
 #include "results_store.h"
-#include "twist_spec.h"
+#include "spec_flags.h"
 
 namespace mdem::cli {
 namespace {
@@ -40,19 +41,29 @@ constexpr const char* kRemoteExitHelp =
     "could not be reached or did not answer (UNAVAILABLE, a deadline), or the connection was\n"
     "lost for good while watching.\n";
 
-void print_submit_help(std::ostream& os) {
-  os << "Usage: mdem submit twist [--spec FILE] [flags] [--request-id ID] [--watch] [--json]\n"
+// The help of `mdem submit`: with a job kind first in `args`, that kind's flags.
+void print_submit_help(const std::vector<std::string>& args, std::ostream& os) {
+  const SpecKind* kind = args.empty() ? nullptr : find_spec_kind(args.front());
+  const std::string name = kind ? kind->name : "KIND";
+  os << "Usage: mdem submit " << name
+     << " [--spec FILE] [flags] [--request-id ID] [--watch] [--json]\n"
         "                          [--db PATH] [--server HOST:PORT] [connection flags]\n"
         "\n"
-        "Queues a twist job on the mdemd daemon: the spec is built and checked exactly as by\n"
-        "`mdem run twist` (same flags, same errors), sent with a request id, and recorded in the\n"
+        "Queues a job on the mdemd daemon: the spec is built and checked exactly as by\n"
+        "`mdem run "
+     << name
+     << "` (same flags, same errors), sent with a request id, and recorded in the\n"
         "local results database under the daemon's job id. Prints the job id (stdout). A\n"
         "request id submitted twice yields one job, so a submit that failed on the way can be\n"
         "retried with the request id it printed. With --watch it then follows the job like\n"
         "`mdem watch`.\n"
-        "\n"
-     << kTwistSpecFlagsHelp
-     << "Submit:\n"
+        "\n";
+  if (kind)
+    os << spec_flags_help(*kind);
+  else
+    os << "Kinds: " << spec_kind_names() << " (`mdem submit KIND --help`: the flags of one)\n\n"
+       << all_spec_flags_help();
+  os << "Submit:\n"
         "  --request-id ID      1..128 characters of [A-Za-z0-9._:-] (default: a random one,\n"
         "                       printed so a retry can reuse it)\n"
         "  --watch              follow the job until it ends (see `mdem watch --help`)\n"
@@ -108,9 +119,9 @@ void print_cancel_help(std::ostream& os) {
 
 // Prints the command's help when asked for, else runs its body, turning what it throws into a
 // message prefixed with the command and an exit code.
-template <class Body>
+template <class Help, class Body>
 int guarded(const std::string& cmd, const std::vector<std::string>& args, std::ostream& out,
-            std::ostream& err, void (*print_help)(std::ostream&), Body&& body) {
+            std::ostream& err, Help&& print_help, Body&& body) {
   if (wants_help(args)) {
     print_help(out);
     return kOk;
@@ -163,7 +174,7 @@ JobRecord record_of(const v1::JobInfo& info, const std::string& server,
                     const std::string& state = "QUEUED") {
   JobRecord r;
   r.id = info.job_id();
-  r.kind = info.kind().empty() ? std::string(info.spec().has_twist() ? "twist" : "") : info.kind();
+  r.kind = info.kind().empty() ? std::string(job_kind_name(info.spec())) : info.kind();
   r.spec_json = info.has_spec() ? spec::to_json(info.spec(), false) : "{}";
   r.state = state;
   r.created_at = info.created_at();
@@ -567,15 +578,18 @@ class Watcher {
 
 int run_submit(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   if (args.empty() || args.front().rfind("-", 0) == 0)
-    throw UsageError("missing the job kind (allowed: twist), e.g. `mdem submit twist --layers 4`");
-  if (args.front() != "twist")
-    throw UsageError("unknown job kind '" + args.front() + "' (allowed: twist)");
-  FlagSpec fs = twist_flag_spec();
+    throw UsageError("missing the job kind (allowed: " + spec_kind_names() +
+                     "), e.g. `mdem submit twist --layers 4`");
+  const SpecKind* kind = find_spec_kind(args.front());
+  if (!kind)
+    throw UsageError("unknown job kind '" + args.front() + "' (allowed: " + spec_kind_names() +
+                     ")");
+  FlagSpec fs = spec_flag_spec(*kind);
   fs.with_value.insert(fs.with_value.end(), {"--request-id", "--db", "--reconnect-timeout"});
   fs.switches.insert(fs.switches.end(), {"--watch", "--json"});
   add_connection_flags(fs);
   const auto given = parse_flags({args.begin() + 1, args.end()}, fs);
-  const v1::JobSpec spec = twist_spec_from_flags(given);
+  const v1::JobSpec spec = spec_from_flags(*kind, given);
   const bool as_json = given.count("--json") > 0, follow = given.count("--watch") > 0;
   std::string request_id;
   if (given.count("--request-id")) {
@@ -589,8 +603,8 @@ int run_submit(const std::vector<std::string>& args, std::ostream& out, std::ost
   ResultsStore store(db_path(given));  // before submitting: a job is never left unrecorded
 
   if (!as_json)
-    err << "submitting a twist job to mdemd at " << settings.server << " (request id " << request_id
-        << ")\n";
+    err << "submitting a " << kind->name << " job to mdemd at " << settings.server
+        << " (request id " << request_id << ")\n";
   JobClient client(settings);
   v1::SubmitJobRequest request;
   request.set_request_id(request_id);
@@ -607,7 +621,7 @@ int run_submit(const std::vector<std::string>& args, std::ostream& out, std::ost
   const v1::JobInfo& info = response.job();
   JobRecord rec = record_of(info, settings.server, state_name(info.state()));
   if (!info.has_spec()) rec.spec_json = spec::to_json(spec, false);
-  if (rec.kind.empty()) rec.kind = "twist";
+  if (rec.kind.empty()) rec.kind = kind->name;
   store.upsert_remote_job(rec);
 
   if (as_json && !follow) {
@@ -792,8 +806,9 @@ int remote_show(const std::string& id, const std::map<std::string, std::string>&
 }
 
 int submit(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  return guarded("submit", args, out, err, print_submit_help,
-                 [&] { return run_submit(args, out, err); });
+  return guarded(
+      "submit", args, out, err, [&](std::ostream& os) { print_submit_help(args, os); },
+      [&] { return run_submit(args, out, err); });
 }
 
 int watch(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {

@@ -198,6 +198,9 @@ std::string highlights(const JobRecord& job) {
       parts.push_back("morphology " + scalar_text(summary["morphology"]));
     if (summary.contains("elements"))
       parts.push_back(scalar_text(summary["elements"]) + " elements");
+    if (summary.contains("grains")) parts.push_back(scalar_text(summary["grains"]) + " grains");
+    if (summary.contains("peak_force_nN"))
+      parts.push_back("peak " + scalar_text(summary["peak_force_nN"]) + " nN");
   }
   if (!job.reason.empty()) parts.push_back(job.reason);
   std::string text;

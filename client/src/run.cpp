@@ -1,5 +1,6 @@
-// `mdem run <kind>`: a job run in this process. Kinds so far: `bundle` (the engine's
-// energy-conservation check: a vibrating, spinning CNT bundle without damping).
+// `mdem run <kind>`: a job run in this process. The kinds built from a job spec (twist,
+// compression: run_spec.cpp), and `bundle` (the engine's energy-conservation check: a vibrating,
+// spinning CNT bundle without damping).
 #include <chrono>
 #include <cmath>
 #include <iomanip>
@@ -16,7 +17,9 @@ namespace mdem::cli {
 namespace {
 
 void print_run_help(std::ostream& os) {
-  os << "Usage: mdem run twist [flags]   (the twist job: `mdem run twist --help`)\n"
+  os << "Usage: mdem run twist [flags]         (a twisted CNT rope: `mdem run twist --help`)\n"
+        "       mdem run compression [flags]   (a particle crushed between platens:\n"
+        "                                       `mdem run compression --help`)\n"
         "       mdem run bundle [flags]\n"
         "\n"
         "Runs a bundle of parallel (10,10) CNTs (bonds + anisotropic vdW, no damping) from seeded\n"
@@ -180,9 +183,10 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   }
   const std::string kind = args.front();
   const std::vector<std::string> rest(args.begin() + 1, args.end());
-  if (kind == "twist") return run_twist(rest, out, err);
+  if (const SpecKind* k = find_spec_kind(kind)) return run_spec_kind(*k, rest, out, err);
   if (kind != "bundle") {
-    err << "mdem run: unknown job kind '" << kind << "' (allowed: twist, bundle)\n";
+    err << "mdem run: unknown job kind '" << kind << "' (allowed: " << spec_kind_names()
+        << ", bundle)\n";
     return kUsage;
   }
   if (wants_help(rest)) {

@@ -1,23 +1,13 @@
 #include "twist_spec.h"
 
-#include <cmath>
-#include <initializer_list>
 #include <sstream>
-#include <utility>
 
-#include "flags.h"
+#include "mdem/twist_job.h"
 
 namespace mdem::cli {
 
-const std::map<std::string, std::string>& twist_flag_fields() {
-  static const std::map<std::string, std::string> m = {
-      {"--name", "name"},
-      {"--seed", "seed"},
-      {"--dt", "run.dt_ps"},
-      {"--safety", "run.safety"},
-      {"--threads", "run.threads"},
-      {"--energy-every", "outputs.energy_every_ps"},
-      {"--snapshot-every", "outputs.snapshot_every_ps"},
+const FlagFields& twist_flag_fields() {
+  static const FlagFields m = {
       {"--layers", "twist.layers"},
       {"--length", "twist.length_nm"},
       {"--spacing", "twist.spacing_nm"},
@@ -40,53 +30,15 @@ const std::map<std::string, std::string>& twist_flag_fields() {
 
 namespace {
 
-// Any finite number; the range is spec::validate's job (it names the field and the range).
-double number(const std::string& flag, const std::string& text) {
-  return parse_number(flag, text, "a finite number");
-}
-
-long whole(const std::string& flag, const std::string& text) {
-  return parse_integer(flag, text, -2147483648L, 2147483647L);
-}
-
-// The enum value named by a flag that takes one of a fixed set of names.
-template <class Enum>
-Enum choice(const std::string& flag, const std::string& text,
-            std::initializer_list<std::pair<const char*, Enum>> allowed) {
-  std::string names;
-  for (const auto& [name, value] : allowed) {
-    if (text == name) return value;
-    names += (names.empty() ? "" : ", ") + std::string(name);
-  }
-  throw UsageError(flag + ": '" + text + "' is not allowed (allowed: " + names + ")");
-}
-
-std::vector<std::string> split(const std::string& s, char sep) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  for (std::string item; std::getline(ss, item, sep);) out.push_back(item);
-  return out;
-}
+double number(const std::string& flag, const std::string& text) { return spec_number(flag, text); }
+int whole(const std::string& flag, const std::string& text) { return spec_int(flag, text); }
 
 }  // namespace
 
-void apply_twist_flags(const std::map<std::string, std::string>& f, v1::JobSpec& spec) {
+void apply_twist_flags(const FlagValues& f, v1::JobSpec& spec) {
   v1::TwistSpec& t = *spec.mutable_twist();
   auto has = [&](const char* k) { return f.count(k) > 0; };
   auto val = [&](const char* k) { return f.at(k); };
-  if (has("--name")) spec.set_name(val("--name"));
-  if (has("--seed"))
-    spec.set_seed(static_cast<std::uint64_t>(parse_integer("--seed", val("--seed"), 0, LONG_MAX)));
-  if (has("--dt") && val("--dt") != "auto")
-    spec.mutable_run()->set_dt_ps(number("--dt", val("--dt")));
-  if (has("--safety")) spec.mutable_run()->set_safety(number("--safety", val("--safety")));
-  if (has("--threads"))
-    spec.mutable_run()->set_threads(static_cast<int>(whole("--threads", val("--threads"))));
-  if (has("--energy-every"))
-    spec.mutable_outputs()->set_energy_every_ps(number("--energy-every", val("--energy-every")));
-  if (has("--snapshot-every"))
-    spec.mutable_outputs()->set_snapshot_every_ps(
-        number("--snapshot-every", val("--snapshot-every")));
   if (has("--layers")) t.set_layers(static_cast<int>(whole("--layers", val("--layers"))));
   if (has("--length")) t.set_length_nm(number("--length", val("--length")));
   if (has("--spacing") && val("--spacing") != "auto")
@@ -131,38 +83,9 @@ void apply_twist_flags(const std::map<std::string, std::string>& f, v1::JobSpec&
     t.set_local_damping(number("--local-damping", val("--local-damping")));
 }
 
-FlagSpec twist_flag_spec() {
-  FlagSpec fs;
-  for (const auto& [flag, field] : twist_flag_fields())
-    if (flag != "--unload") fs.with_value.push_back(flag);
-  fs.with_value.push_back("--spec");
-  fs.switches = {"--unload"};
-  return fs;
-}
+namespace {
 
-v1::JobSpec twist_spec_from_flags(const std::map<std::string, std::string>& given) {
-  v1::JobSpec spec;
-  if (given.count("--spec")) spec = spec::load_file(given.at("--spec"));
-  if (spec.kind_case() != v1::JobSpec::kTwist && spec.kind_case() != v1::JobSpec::KIND_NOT_SET)
-    throw UsageError("--spec: the file describes another job kind (allowed here: twist)");
-  apply_twist_flags(given, spec);
-  return spec::finalize(spec);
-}
-
-std::string describe_spec_error(const spec::SpecError& e) {
-  std::ostringstream o;
-  for (const spec::FieldError& f : e.errors()) {
-    std::string flag;
-    for (const auto& [fl, field] : twist_flag_fields())
-      if (f.field == field || f.field.rfind(field + "[", 0) == 0) flag = fl;
-    o << "  " << f.field << (flag.empty() ? "" : " (" + flag + ")") << ": " << f.message << "\n";
-  }
-  return o.str();
-}
-
-const char* const kTwistSpecFlagsHelp =
-    "Spec:\n"
-    "  --spec FILE          a JobSpec as JSON or YAML (.json/.yaml/.yml); flags override it\n"
+constexpr const char* kTwistFlagsHelp =
     "Rope:\n"
     "  --layers N           hexagon layers incl. the centre tube, 2..10 (default 6 = 91 "
     "tubes)\n"
@@ -185,14 +108,35 @@ const char* const kTwistSpecFlagsHelp =
     "  --damping-ratio X    vdW contact dashpot ratio, 0..1 (default 0.03)\n"
     "  --local-damping X    PFC local damping, 0..0.99 (default 0.1)\n"
     "  --temperature K      seeded random velocities and spins of K kelvin at the start,\n"
-    "                       0..2000 (default 0: at rest; noise lets buckling start)\n"
-    "Run:\n"
-    "  --dt X|auto          time step, 1e-6..1 ps (default auto = safety x critical step)\n"
-    "  --safety X           fraction of the critical step, (0, 1] (default 0.6)\n"
-    "  --threads N          OpenMP threads, 0 = all cores (default 0)\n"
-    "  --energy-every X     energy/observable frame interval, ps (default 1)\n"
-    "  --snapshot-every X   snapshot interval, ps; 0 = none (default 10)\n"
-    "  --name TEXT          a label for `mdem ls`\n"
-    "  --seed N             random seed for --temperature (default 1)\n";
+    "                       0..2000 (default 0: at rest; noise lets buckling start;\n"
+    "                       seeded by --seed)\n";
+
+constexpr const char* kTwistAbout =
+    "Twists a hexagonal rope of parallel (10,10) CNTs by torques on its end grips (thesis\n"
+    "Ch. 4): the torque rises at --rate to --torque, is held for --hold, and optionally\n"
+    "unloaded. Reports twist angle, end shift, radius, topological charge Q of the mid\n"
+    "cross-section and the morphology.\n";
+
+std::string describe_twist(Job& job, const v1::JobSpec& spec) {
+  auto* twist = dynamic_cast<TwistJob*>(&job);
+  if (!twist) return {};
+  const v1::TwistSpec& t = spec.twist();
+  std::ostringstream o;
+  o << twist->rope().tubes.size() << " tubes x " << twist->rope().segments
+    << " segments = " << job.system().elements().size() << " elements, " << job.duration()
+    << " ps (ramp " << twist->protocol().ramp_time() << " ps to " << t.torque_nn_nm()
+    << " nN·nm, hold " << t.hold_ps() << " ps, "
+    << (t.boundary() == v1::TWIST_RELAXATION ? "twist-relaxation" : "constant-moment") << ")";
+  return o.str();
+}
+
+std::string no_building_line(const v1::JobSpec&) { return {}; }
+
+}  // namespace
+
+SpecKind twist_kind() {
+  return {"twist",     v1::JobSpec::kTwist, twist_flag_fields, {"--unload"},    apply_twist_flags,
+          kTwistAbout, kTwistFlagsHelp,     describe_twist,    no_building_line};
+}
 
 }  // namespace mdem::cli

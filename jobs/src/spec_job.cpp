@@ -1,5 +1,6 @@
 #include "mdem/spec_job.h"
 
+#include <climits>
 #include <cmath>
 #include <stdexcept>
 
@@ -34,9 +35,45 @@ TwistJobSpec twist_job_spec(const v1::JobSpec& spec) {
   return job;
 }
 
+CompressionJobSpec compression_job_spec(const v1::JobSpec& spec) {
+  const v1::CompressionSpec& c = spec.compression();
+  CompressionJobSpec job;
+  PackingSpec& p = job.particle;
+  p.shape = PackingShape::Shell;
+  p.r_outer = c.outer_radius_nm();
+  p.r_inner = c.inner_radius_nm();
+  p.grain_r_min = c.grain_radius_min_nm();
+  p.grain_r_max = c.grain_radius_max_nm();
+  p.target_porosity = c.porosity();
+  p.material.youngs = units::GPa(c.youngs_gpa());
+  p.material.poisson = c.poisson();
+  p.material.density =
+      c.density_g_cm3() * units::kGramPerCm3InAmuPerNm3 * units::kAmu;  // g/cm³ -> internal
+  p.seed = spec.seed();
+  job.bond.material = p.material;
+  switch (c.bond()) {
+    case v1::PLASTIC:
+      job.bond.behaviour = BondBehaviour::Plastic;
+      break;
+    case v1::BRITTLE:
+      job.bond.behaviour = BondBehaviour::Brittle;
+      break;
+    default:
+      job.bond.behaviour = BondBehaviour::Elastic;
+  }
+  // Unused by elastic bonds (a CUSTOM material's elastic bond may have none).
+  job.bond.strength = c.has_strength_gpa() ? units::GPa(c.strength_gpa()) : 0.0;
+  job.loading.speed = c.platen_speed_nm_per_ps();
+  job.loading.peak_displacement = c.peak_displacement_nm();
+  job.loading.unload = c.unload();
+  job.viscous_ratio = c.viscous_ratio();
+  return job;
+}
+
 IntegratorSettings integrator_settings(const v1::JobSpec& spec) {
   IntegratorSettings s;
   if (spec.has_twist()) s.local_damping = spec.twist().local_damping();
+  if (spec.has_compression()) s.local_damping = spec.compression().local_damping();
   if (spec.run().has_dt_ps()) s.dt = spec.run().dt_ps();
   s.safety = spec.run().safety();
   s.threads = spec.run().threads();
@@ -54,9 +91,15 @@ std::string_view job_kind_name(const v1::JobSpec& spec) {
   switch (spec.kind_case()) {
     case v1::JobSpec::kTwist:
       return "twist";
+    case v1::JobSpec::kCompression:
+      return "compression";
     default:
       return "";
   }
+}
+
+bool builds_quickly(const v1::JobSpec& spec) {
+  return spec.kind_case() != v1::JobSpec::kCompression;
 }
 
 long element_bound(const v1::JobSpec& spec) {
@@ -64,6 +107,11 @@ long element_bound(const v1::JobSpec& spec) {
     case v1::JobSpec::kTwist:
       return static_cast<long>(spec::hex_tube_count(spec.twist().layers())) *
              spec::twist_segments(spec.twist());
+    case v1::JobSpec::kCompression: {
+      const double n = spec::compression_grain_estimate(spec.compression());
+      if (!(n < 1e15)) return LONG_MAX;  // also NaN
+      return static_cast<long>(std::ceil(1.01 * n + 10)) + 2;
+    }
     default:
       return 0;
   }
@@ -75,9 +123,11 @@ std::unique_ptr<Job> make_spec_job(const v1::JobSpec& spec, int threads) {
   switch (spec.kind_case()) {
     case v1::JobSpec::kTwist:
       return std::make_unique<TwistJob>(twist_job_spec(spec), s);
+    case v1::JobSpec::kCompression:
+      return std::make_unique<CompressionJob>(compression_job_spec(spec), s);
     default:
       throw std::invalid_argument(
-          "the job spec names no job kind this build runs (allowed: twist)");
+          "the job spec names no job kind this build runs (allowed: twist, compression)");
   }
 }
 

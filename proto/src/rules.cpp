@@ -31,4 +31,20 @@ std::string allowed(const Range& r) {
   return s + ")";
 }
 
+const MaterialPreset* material_preset(mdem::v1::GrainMaterialKind kind) {
+  // scenes.md compression: Au E = 79 GPa, nu = 0.46, 19.3 g/cm3, plastic sigma_y 2-8 GPa;
+  // CdS E = 28 GPa, nu = 0.46, 4.82 g/cm3, brittle sigma_f = 4 GPa.
+  static constexpr MaterialPreset kGold{79.0, 0.46, 19.3, 8.0, mdem::v1::PLASTIC};
+  static constexpr MaterialPreset kCadmiumSulfide{28.0, 0.46, 4.82, 4.0, mdem::v1::BRITTLE};
+  switch (kind) {
+    case mdem::v1::GOLD:
+    case mdem::v1::GRAIN_MATERIAL_UNSPECIFIED:
+      return &kGold;
+    case mdem::v1::CADMIUM_SULFIDE:
+      return &kCadmiumSulfide;
+    default:
+      return nullptr;
+  }
+}
+
 }  // namespace mdem::spec::detail

@@ -4,6 +4,8 @@
 #include <string>
 #include <string_view>
 
+#include "mdem/v1/job.pb.h"
+
 namespace mdem::spec::detail {
 
 inline constexpr double kSegmentNm = 1.356;  // (10,10) CNT segment length T
@@ -35,6 +37,17 @@ std::string allowed(const Range& r);
 // Shortest text that reads back as v: "67.8", "1e-06", "nan", "inf".
 std::string number_text(double v);
 
+// The preset grain materials of a compression job, in user units; nullptr for CUSTOM or a
+// number that names no material.
+struct MaterialPreset {
+  double youngs_gpa;
+  double poisson;
+  double density_g_cm3;
+  double strength_gpa;  // sigma_y of Au's plastic bonds, sigma_f of CdS's brittle ones
+  mdem::v1::GrainBondKind bond;
+};
+const MaterialPreset* material_preset(mdem::v1::GrainMaterialKind kind);
+
 namespace defaults {
 inline constexpr double kSafety = 0.6;
 inline constexpr int kThreads = 0;
@@ -55,6 +68,18 @@ inline constexpr int kGripSegments = 1;
 inline constexpr double kVdwDampingRatio = 0.03;
 inline constexpr double kLocalDamping = 0.1;
 inline constexpr double kTemperatureK = 0.0;
+// compression (the grain material's defaults are in compression_material)
+inline constexpr double kOuterRadiusNm = 10.0;
+inline constexpr double kInnerRadiusNm = 0.0;
+inline constexpr double kGrainRadiusMinNm = 1.0;
+inline constexpr double kGrainRadiusMaxNm = 2.0;
+inline constexpr double kPorosity = 0.4;
+inline constexpr double kPlatenSpeed = 0.01;
+// The peak displacement's default is this fraction of outer_radius_nm (20 % of the diameter).
+inline constexpr double kPeakPerOuterRadius = 0.4;
+inline constexpr bool kCompressionUnload = true;
+inline constexpr double kViscousRatio = 0.5;
+inline constexpr double kCompressionLocalDamping = 0.7;
 }  // namespace defaults
 
 namespace ranges {
@@ -76,6 +101,17 @@ inline constexpr Range kUnloadHoldPs = closed(0.0, 1e6, "ps");
 inline constexpr Range kVdwDampingRatio = closed(0.0, 1.0, "");
 inline constexpr Range kLocalDamping = closed(0.0, 0.99, "");
 inline constexpr Range kTemperatureK = closed(0.0, 2000.0, "K");
+inline constexpr Range kOuterRadiusNm = closed(2.0, 1000.0, "nm");
+inline constexpr Range kInnerRadiusNm = closed(0.0, 1000.0, "nm", "0 = a full sphere");
+inline constexpr Range kGrainRadiusNm = closed(0.2, 100.0, "nm");
+inline constexpr Range kPorosity = {0.2, 0.95, true, true, "", {}};
+inline constexpr Range kYoungsGpa = above(0.0, 2000.0, "GPa");
+inline constexpr Range kPoisson = below(0.0, 0.5, "");
+inline constexpr Range kDensity = above(0.0, 50.0, "g/cm³");
+inline constexpr Range kStrengthGpa = above(0.0, 100.0, "GPa");
+inline constexpr Range kPlatenSpeed = above(0.0, 1.0, "nm/ps");
+inline constexpr Range kPeakDisplacementNm = above(0.0, 2000.0, "nm");
+inline constexpr Range kViscousRatio = closed(0.0, 1.0, "");
 inline constexpr std::size_t kNameMaxChars = 200;
 }  // namespace ranges
 

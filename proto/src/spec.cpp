@@ -1,4 +1,4 @@
-// SpecError, defaults, finalize and the rope's derived counts.
+// SpecError, defaults, finalize, the rope's derived counts and the particle's grain estimate.
 #include "mdem/spec.h"
 
 #include <climits>
@@ -59,6 +59,38 @@ void default_twist(mdem::v1::TwistSpec& t) {
   if (!t.has_temperature_k()) t.set_temperature_k(d::kTemperatureK);
 }
 
+void default_compression_material(mdem::v1::CompressionSpec& c) {
+  if (c.material() == mdem::v1::GRAIN_MATERIAL_UNSPECIFIED) c.set_material(mdem::v1::GOLD);
+  const detail::MaterialPreset* m = detail::material_preset(c.material());
+  if (c.bond() == mdem::v1::GRAIN_BOND_UNSPECIFIED &&
+      mdem::v1::GrainMaterialKind_IsValid(c.material()))
+    c.set_bond(m ? m->bond : mdem::v1::ELASTIC);
+  if (!m) return;  // CUSTOM (or an invalid number, which validation reports)
+  if (!c.has_youngs_gpa()) c.set_youngs_gpa(m->youngs_gpa);
+  if (!c.has_poisson()) c.set_poisson(m->poisson);
+  if (!c.has_density_g_cm3()) c.set_density_g_cm3(m->density_g_cm3);
+  if (!c.has_strength_gpa()) c.set_strength_gpa(m->strength_gpa);
+}
+
+void default_compression(mdem::v1::CompressionSpec& c) {
+  if (!c.has_outer_radius_nm()) c.set_outer_radius_nm(d::kOuterRadiusNm);
+  if (!c.has_inner_radius_nm()) c.set_inner_radius_nm(d::kInnerRadiusNm);
+  if (!c.has_grain_radius_min_nm()) c.set_grain_radius_min_nm(d::kGrainRadiusMinNm);
+  if (!c.has_grain_radius_max_nm()) c.set_grain_radius_max_nm(d::kGrainRadiusMaxNm);
+  if (!c.has_porosity()) c.set_porosity(d::kPorosity);
+  default_compression_material(c);
+  if (!c.has_platen_speed_nm_per_ps()) c.set_platen_speed_nm_per_ps(d::kPlatenSpeed);
+  if (!c.has_peak_displacement_nm()) {
+    // 20 % of the diameter; of the default one when the given radius is invalid (reported).
+    const bool outer_ok = detail::contains(detail::ranges::kOuterRadiusNm, c.outer_radius_nm());
+    c.set_peak_displacement_nm(d::kPeakPerOuterRadius *
+                               (outer_ok ? c.outer_radius_nm() : d::kOuterRadiusNm));
+  }
+  if (!c.has_unload()) c.set_unload(d::kCompressionUnload);
+  if (!c.has_viscous_ratio()) c.set_viscous_ratio(d::kViscousRatio);
+  if (!c.has_local_damping()) c.set_local_damping(d::kCompressionLocalDamping);
+}
+
 }  // namespace
 
 SpecError::SpecError(std::vector<FieldError> errors)
@@ -70,6 +102,7 @@ void apply_defaults(mdem::v1::JobSpec& spec) {
   default_run(*spec.mutable_run());
   default_outputs(*spec.mutable_outputs());
   if (spec.has_twist()) default_twist(*spec.mutable_twist());
+  if (spec.has_compression()) default_compression(*spec.mutable_compression());
 }
 
 mdem::v1::JobSpec finalize(mdem::v1::JobSpec spec) {
@@ -93,6 +126,16 @@ int hex_tube_count(int layers) {
   const long long n = layers;
   const long long count = 3 * n * n - 3 * n + 1;
   return count > INT_MAX ? INT_MAX : static_cast<int>(count);
+}
+
+double compression_grain_estimate(const mdem::v1::CompressionSpec& c) {
+  const double outer = c.has_outer_radius_nm() ? c.outer_radius_nm() : d::kOuterRadiusNm;
+  const double inner = c.has_inner_radius_nm() ? c.inner_radius_nm() : d::kInnerRadiusNm;
+  const double a = c.has_grain_radius_min_nm() ? c.grain_radius_min_nm() : d::kGrainRadiusMinNm;
+  const double b = c.has_grain_radius_max_nm() ? c.grain_radius_max_nm() : d::kGrainRadiusMaxNm;
+  const double porosity = c.has_porosity() ? c.porosity() : d::kPorosity;
+  const double mean_r3 = (a + b) * (a * a + b * b) / 4.0;
+  return (1.0 - porosity) * (outer * outer * outer - inner * inner * inner) / mean_r3;
 }
 
 }  // namespace mdem::spec

@@ -257,12 +257,170 @@ void check_twist(const mdem::v1::TwistSpec& t, Report& rep) {
   check_damping(t, rep);
 }
 
+// ---- compression ----
+
+// A field's value, or its default when unset.
+double value_or(bool has, double v, double fallback) { return has ? v : fallback; }
+
+// Whether the field's value (its default when unset) is within its range: the cross-field
+// rules below check only fields that are valid on their own, so one mistake gives one error.
+bool valid(bool has, double v, double fallback, const Range& range) {
+  return contains(range, value_or(has, v, fallback));
+}
+
+using Compression = mdem::v1::CompressionSpec;
+
+double outer_of(const Compression& c) {
+  return value_or(c.has_outer_radius_nm(), c.outer_radius_nm(), d::kOuterRadiusNm);
+}
+double inner_of(const Compression& c) {
+  return value_or(c.has_inner_radius_nm(), c.inner_radius_nm(), d::kInnerRadiusNm);
+}
+double rmin_of(const Compression& c) {
+  return value_or(c.has_grain_radius_min_nm(), c.grain_radius_min_nm(), d::kGrainRadiusMinNm);
+}
+double rmax_of(const Compression& c) {
+  return value_or(c.has_grain_radius_max_nm(), c.grain_radius_max_nm(), d::kGrainRadiusMaxNm);
+}
+bool outer_ok(const Compression& c) {
+  return valid(c.has_outer_radius_nm(), c.outer_radius_nm(), d::kOuterRadiusNm, r::kOuterRadiusNm);
+}
+bool inner_ok(const Compression& c) {
+  return valid(c.has_inner_radius_nm(), c.inner_radius_nm(), d::kInnerRadiusNm, r::kInnerRadiusNm);
+}
+bool radii_ok(const Compression& c) {
+  return valid(c.has_grain_radius_min_nm(), c.grain_radius_min_nm(), d::kGrainRadiusMinNm,
+               r::kGrainRadiusNm) &&
+         valid(c.has_grain_radius_max_nm(), c.grain_radius_max_nm(), d::kGrainRadiusMaxNm,
+               r::kGrainRadiusNm);
+}
+
+// Inner radius below the outer; a grain fits across the shell's wall; min <= max.
+void check_particle_shape(const Compression& c, Report& rep) {
+  const double outer = outer_of(c), inner = inner_of(c), rmin = rmin_of(c), rmax = rmax_of(c);
+  if (outer_ok(c) && inner_ok(c) && inner >= outer)
+    rep.add("compression.inner_radius_nm",
+            number_text(inner) + " is not below the outer radius (allowed: >= 0 and < " +
+                number_text(outer) + " nm, outer_radius_nm; 0 = a full sphere)");
+  if (!radii_ok(c)) return;
+  if (rmin > rmax)
+    rep.add("compression.grain_radius_min_nm",
+            number_text(rmin) + " is above grain_radius_max_nm (allowed: <= " + number_text(rmax) +
+                " nm, grain_radius_max_nm)");
+  if (outer_ok(c) && inner_ok(c) && inner < outer && 2.0 * rmax > outer - inner)
+    rep.add("compression.grain_radius_max_nm",
+            number_text(rmax) + " nm grains do not fit in the shell's wall of " +
+                number_text(outer - inner) +
+                " nm (allowed: <= " + number_text((outer - inner) / 2.0) +
+                " nm, half of outer_radius_nm - inner_radius_nm)");
+}
+
+// The grain count from volume, porosity and grain size, before anything is built.
+void check_grain_count(const Compression& c, Report& rep) {
+  const bool porosity_ok = valid(c.has_porosity(), c.porosity(), d::kPorosity, r::kPorosity);
+  if (!outer_ok(c) || !inner_ok(c) || !radii_ok(c) || !porosity_ok) return;
+  if (inner_of(c) >= outer_of(c) || rmin_of(c) > rmax_of(c)) return;
+  // The packing draws grains while their volume stays within half a grain of the target: the
+  // largest grain must fit in that way, or the particle may hold none.
+  const double outer = outer_of(c), inner = inner_of(c), rmax = rmax_of(c);
+  const double porosity = value_or(c.has_porosity(), c.porosity(), d::kPorosity);
+  if ((1.0 - porosity) * (outer * outer * outer - inner * inner * inner) < 0.5 * rmax * rmax * rmax)
+    return rep.add("compression",
+                   "the particle would hold no grain: (1 - porosity) x shell "
+                   "volume is below half the volume of a grain of "
+                   "grain_radius_max_nm (allowed: a larger particle, a lower "
+                   "porosity or smaller grains)");
+  const double n = compression_grain_estimate(c);
+  if (n <= kMaxCompressionGrains) return;
+  char count[32];
+  std::snprintf(count, sizeof count, "%.3g", n);
+  rep.add("compression", std::string("the particle would hold about ") + count +
+                             " grains, (1 - porosity) x shell volume / mean grain volume "
+                             "(allowed: at most " +
+                             std::to_string(static_cast<long>(kMaxCompressionGrains)) +
+                             " grains; make the particle smaller or the grains larger)");
+}
+
+void check_material(const Compression& c, Report& rep) {
+  if (!mdem::v1::GrainMaterialKind_IsValid(c.material()))
+    rep.add("compression.material",
+            std::to_string(c.material()) +
+                " is not a grain material (allowed: GOLD, CADMIUM_SULFIDE, CUSTOM; unset = GOLD)");
+  const bool custom = c.material() == mdem::v1::CUSTOM;
+  struct Field {
+    const char* name;
+    bool has;
+    double v;
+    const Range& range;
+  };
+  for (const Field& f :
+       {Field{"youngs_gpa", c.has_youngs_gpa(), c.youngs_gpa(), r::kYoungsGpa},
+        Field{"poisson", c.has_poisson(), c.poisson(), r::kPoisson},
+        Field{"density_g_cm3", c.has_density_g_cm3(), c.density_g_cm3(), r::kDensity}}) {
+    const std::string field = std::string("compression.") + f.name;
+    if (custom && !f.has) rep.add(field, "is required for material CUSTOM " + allowed(f.range));
+    rep.real(field, f.has, f.v, f.range);
+  }
+}
+
+void check_bond(const Compression& c, Report& rep) {
+  if (!mdem::v1::GrainBondKind_IsValid(c.bond()))
+    rep.add("compression.bond", std::to_string(c.bond()) +
+                                    " is not a bond kind (allowed: ELASTIC, PLASTIC, BRITTLE; "
+                                    "unset = the material's)");
+  // The bond an unset kind stands for: the material's, ELASTIC for CUSTOM.
+  mdem::v1::GrainBondKind bond = c.bond();
+  if (bond == mdem::v1::GRAIN_BOND_UNSPECIFIED) {
+    const detail::MaterialPreset* m = detail::material_preset(c.material());
+    bond = m ? m->bond : mdem::v1::ELASTIC;
+  }
+  const bool needs_strength = bond == mdem::v1::PLASTIC || bond == mdem::v1::BRITTLE;
+  if (needs_strength && c.material() == mdem::v1::CUSTOM && !c.has_strength_gpa())
+    rep.add("compression.strength_gpa", std::string("is required for material CUSTOM with ") +
+                                            mdem::v1::GrainBondKind_Name(bond) + " bonds " +
+                                            allowed(r::kStrengthGpa));
+  rep.real("compression.strength_gpa", c.has_strength_gpa(), c.strength_gpa(), r::kStrengthGpa);
+}
+
+void check_compression_loading(const Compression& c, Report& rep) {
+  rep.real("compression.platen_speed_nm_per_ps", c.has_platen_speed_nm_per_ps(),
+           c.platen_speed_nm_per_ps(), r::kPlatenSpeed);
+  // Less than the particle's diameter, so that the platens never meet; with an invalid outer
+  // radius (reported on its own) only the fixed range is checked.
+  const Range peak = outer_ok(c)
+                         ? Range{0.0, 2.0 * outer_of(c), true, true, "nm", "twice outer_radius_nm"}
+                         : r::kPeakDisplacementNm;
+  rep.real("compression.peak_displacement_nm", c.has_peak_displacement_nm(),
+           c.peak_displacement_nm(), peak);
+  rep.real("compression.viscous_ratio", c.has_viscous_ratio(), c.viscous_ratio(), r::kViscousRatio);
+}
+
+void check_compression(const Compression& c, Report& rep) {
+  rep.real("compression.outer_radius_nm", c.has_outer_radius_nm(), c.outer_radius_nm(),
+           r::kOuterRadiusNm);
+  rep.real("compression.inner_radius_nm", c.has_inner_radius_nm(), c.inner_radius_nm(),
+           r::kInnerRadiusNm);
+  rep.real("compression.grain_radius_min_nm", c.has_grain_radius_min_nm(), c.grain_radius_min_nm(),
+           r::kGrainRadiusNm);
+  rep.real("compression.grain_radius_max_nm", c.has_grain_radius_max_nm(), c.grain_radius_max_nm(),
+           r::kGrainRadiusNm);
+  rep.real("compression.porosity", c.has_porosity(), c.porosity(), r::kPorosity);
+  check_particle_shape(c, rep);
+  check_grain_count(c, rep);
+  check_material(c, rep);
+  check_bond(c, rep);
+  check_compression_loading(c, rep);
+  rep.real("compression.local_damping", c.has_local_damping(), c.local_damping(), r::kLocalDamping);
+}
+
 void check_kind(const mdem::v1::JobSpec& spec, Report& rep) {
   switch (spec.kind_case()) {
     case mdem::v1::JobSpec::kTwist:
       return check_twist(spec.twist(), rep);
+    case mdem::v1::JobSpec::kCompression:
+      return check_compression(spec.compression(), rep);
     case mdem::v1::JobSpec::KIND_NOT_SET:
-      return rep.add("kind", "no job kind given (allowed: twist)");
+      return rep.add("kind", "no job kind given (allowed: twist, compression)");
   }
 }
 

@@ -7,22 +7,30 @@
 #include <string>
 #include <string_view>
 
+#include "mdem/compression_job.h"
 #include "mdem/job.h"
 #include "mdem/twist_job.h"
 #include "mdem/v1/job.pb.h"
 
 namespace mdem {
 
-// The twist job's engine spec, integrator settings and output cadence of a finalized spec.
+// The twist and compression jobs' engine specs (internal units), integrator settings (the
+// kind's local damping) and output cadence of a finalized spec.
 TwistJobSpec twist_job_spec(const v1::JobSpec& spec);
+CompressionJobSpec compression_job_spec(const v1::JobSpec& spec);
 IntegratorSettings integrator_settings(const v1::JobSpec& spec);
 JobCadence job_cadence(const v1::JobSpec& spec);
 
-// "twist", ... for the kind the spec holds; "" for none.
+// "twist", "compression" for the kind the spec holds; "" for none.
 std::string_view job_kind_name(const v1::JobSpec& spec);
 // An upper bound of the job's element count from the spec alone (nothing built), so a daemon
-// can refuse an oversized job cheaply.
+// can refuse an oversized job cheaply. Compression: the grain estimate (its random count stays
+// within 1 % + 10 of it) and the two platens.
 long element_bound(const v1::JobSpec& spec);
+// Whether building the job's scene is quick (twist: a lattice) rather than a simulation of its
+// own (compression: packing the grains, minutes for a thesis-size particle). A daemon builds a
+// quick job at submit to check its time step and step count, and leaves the others to the worker.
+bool builds_quickly(const v1::JobSpec& spec);
 
 // Builds the engine job of a finalized spec. threads > 0 overrides the spec's thread count (the
 // daemon gives each job its share of the machine). Throws std::invalid_argument for an impossible

@@ -35,9 +35,11 @@ class SpecError : public std::invalid_argument {
 // Largest spec text accepted by parse_json, parse_yaml and load_file.
 inline constexpr std::size_t kMaxSpecBytes = std::size_t{16} << 20;
 
-// Fills every unset optional field (run, outputs, the twist spec and each of its line defects)
+// Fills every unset optional field (run, outputs, the job kind's spec and each twist line defect)
 // with its default; boundary UNSPECIFIED becomes CONSTANT_MOMENT. run.dt_ps and twist.spacing_nm
-// stay unset: they mean "automatic".
+// stay unset: they mean "automatic". A compression spec gets its material's E, nu, density,
+// bond kind and strength (material UNSPECIFIED = GOLD); CUSTOM gets none of them (validation
+// then asks for E, nu and density, and for the strength of a PLASTIC or BRITTLE bond).
 void apply_defaults(mdem::v1::JobSpec& spec);
 
 // Every problem of the spec, not just the first; empty if valid. Unset fields count as their
@@ -71,5 +73,13 @@ int twist_segments(const mdem::v1::TwistSpec& twist);
 
 // 3N^2 - 3N + 1 tubes of N hexagon layers (0 for N < 1).
 int hex_tube_count(int layers);
+
+// Most grains a compression particle may hold; validate refuses a larger estimate.
+inline constexpr double kMaxCompressionGrains = 2'000'000;
+
+// The compression particle's grain count, (1 - porosity) x shell volume / mean grain volume
+// with radii uniform in [min, max] (mean r^3 = (a + b)(a^2 + b^2)/4), the defaults standing in
+// for unset fields; not rounded. NaN when a field is not finite.
+double compression_grain_estimate(const mdem::v1::CompressionSpec& c);
 
 }  // namespace mdem::spec

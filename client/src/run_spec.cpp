@@ -1,6 +1,7 @@
-// `mdem run twist`: the twist job in this process, from flags and/or a JSON/YAML spec file, with
-// a progress bar on a terminal (plain lines when piped), results in the local database and a
-// summary (text, or one JSON object with --json).
+// `mdem run <kind>` for the kinds built from a job spec (spec_kinds(): twist, compression): the
+// job in this process, from flags and/or a JSON/YAML spec file, with a progress bar on a
+// terminal (plain lines when piped), results in the local database and a summary (text, or one
+// JSON object with --json).
 #include <chrono>
 
 #include "console.h"
@@ -10,22 +11,20 @@
 #include "mdem/spec.h"
 #include "mdem/spec_job.h"
 #include "results_store.h"
-#include "twist_spec.h"
+#include "spec_flags.h"
 
 namespace mdem::cli {
 namespace {
 
-void print_twist_help(std::ostream& os) {
-  os << "Usage: mdem run twist [--spec FILE] [flags]\n"
-        "\n"
-        "Twists a hexagonal rope of parallel (10,10) CNTs by torques on its end grips (thesis\n"
-        "Ch. 4): the torque rises at --rate to --torque, is held for --hold, and optionally\n"
-        "unloaded. Reports twist angle, end shift, radius, topological charge Q of the mid\n"
-        "cross-section and the morphology; stores spec, energies and snapshots in the results\n"
-        "database (see `mdem ls`, `mdem show`, `mdem export`, `mdem plot`). To run it on an\n"
-        "mdemd daemon instead, use the same flags with `mdem submit twist`.\n"
-        "\n"
-     << kTwistSpecFlagsHelp
+void print_help(const SpecKind& kind, std::ostream& os) {
+  os << "Usage: mdem run " << kind.name << " [--spec FILE] [flags]\n\n"
+     << kind.about
+     << "Stores spec, energies and snapshots in the results database (see `mdem ls`, `mdem "
+        "show`,\n"
+        "`mdem export`, `mdem plot`). To run it on an mdemd daemon instead, use the same flags\n"
+        "with `mdem submit "
+     << kind.name << "`.\n\n"
+     << spec_flags_help(kind)
      << "Output:\n"
         "  --db PATH            results database (default $MDEM_DB, else\n"
         "                       ~/.local/share/mdem/results.db)\n"
@@ -42,41 +41,35 @@ struct Parsed {
   bool json = false;
 };
 
-Parsed parse_twist_args(const std::vector<std::string>& args) {
-  FlagSpec fs = twist_flag_spec();
+Parsed parse_args(const SpecKind& kind, const std::vector<std::string>& args) {
+  FlagSpec fs = spec_flag_spec(kind);
   fs.with_value.push_back("--db");
   fs.switches.push_back("--json");
   const auto given = parse_flags(args, fs);
   Parsed p;
-  p.spec = twist_spec_from_flags(given);
+  p.spec = spec_from_flags(kind, given);
   p.db = given.count("--db") ? given.at("--db") : ResultsStore::default_path();
   p.json = given.count("--json") > 0;
   return p;
 }
 
-int execute(const Parsed& p, std::ostream& out, std::ostream& err) {
-  TwistJob job(twist_job_spec(p.spec), integrator_settings(p.spec));
-  const TwistLoading& loading = twist_job_spec(p.spec).loading;
+int execute(const SpecKind& kind, const Parsed& p, std::ostream& out, std::ostream& err) {
+  if (!p.json)
+    if (const std::string line = kind.building(p.spec); !line.empty())
+      err << kind.name << ": " << line << "\n";
+  const std::unique_ptr<Job> built = make_spec_job(p.spec);
+  Job& job = *built;
   // A time step above the safe limit is refused here, before anything is stored.
   job.system().initialize();
   ResultsStore store(p.db);
   JobRecord rec;
   rec.id = ResultsStore::new_job_id();
-  rec.kind = "twist";
+  rec.kind = kind.name;
   rec.spec_json = spec::to_json(p.spec, false);
   rec.state = "RUNNING";
   store.create_job(rec);
   store.set_columns(rec.id, job.columns());
-
-  const long n = static_cast<long>(job.system().elements().size());
-  if (!p.json)
-    err << "twist " << rec.id << ": " << job.rope().tubes.size() << " tubes x "
-        << job.rope().segments << " segments = " << n << " elements, " << job.duration()
-        << " ps (ramp " << job.protocol().ramp_time() << " ps to " << p.spec.twist().torque_nn_nm()
-        << " nN·nm, hold " << p.spec.twist().hold_ps() << " ps, "
-        << (loading.boundary == TwistBoundary::ConstantMoment ? "constant-moment"
-                                                              : "twist-relaxation")
-        << ")\n";
+  if (!p.json) err << kind.name << " " << rec.id << ": " << kind.describe(job, p.spec) << "\n";
 
   std::vector<SeriesFrame> pending;
   ProgressReporter progress(err, is_terminal(err), p.json);
@@ -124,24 +117,26 @@ int execute(const Parsed& p, std::ostream& out, std::ostream& err) {
 
 }  // namespace
 
-int run_twist(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+int run_spec_kind(const SpecKind& kind, const std::vector<std::string>& args, std::ostream& out,
+                  std::ostream& err) {
   if (wants_help(args)) {
-    print_twist_help(out);
+    print_help(kind, out);
     return kOk;
   }
+  const std::string command = "mdem run " + kind.name;
   Parsed p;
   try {
-    p = parse_twist_args(args);
+    p = parse_args(kind, args);
   } catch (const spec::SpecError& e) {
-    err << "mdem run twist: invalid job spec:\n"
-        << describe_spec_error(e) << "Run 'mdem run twist --help' for the flags.\n";
+    err << command << ": invalid job spec:\n"
+        << describe_spec_error(e) << "Run '" << command << " --help' for the flags.\n";
     return kUsage;
   } catch (const UsageError& e) {
-    err << "mdem run twist: " << e.what() << "\nRun 'mdem run twist --help' for the flags.\n";
+    err << command << ": " << e.what() << "\nRun '" << command << " --help' for the flags.\n";
     return kUsage;
   }
   return guarded_run(
-      "mdem run twist", [&] { return execute(p, out, err); }, err);
+      command, [&] { return execute(kind, p, out, err); }, err);
 }
 
 }  // namespace mdem::cli

@@ -1,0 +1,140 @@
+#include "spec_flags.h"
+
+#include <algorithm>
+#include <climits>
+#include <sstream>
+
+#include "compression_spec.h"
+#include "twist_spec.h"
+
+namespace mdem::cli {
+
+const FlagFields& common_flag_fields() {
+  static const FlagFields m = {
+      {"--name", "name"},
+      {"--seed", "seed"},
+      {"--dt", "run.dt_ps"},
+      {"--safety", "run.safety"},
+      {"--threads", "run.threads"},
+      {"--energy-every", "outputs.energy_every_ps"},
+      {"--snapshot-every", "outputs.snapshot_every_ps"},
+  };
+  return m;
+}
+
+double spec_number(const std::string& flag, const std::string& text) {
+  return parse_number(flag, text, "a finite number");
+}
+
+int spec_int(const std::string& flag, const std::string& text) {
+  return static_cast<int>(parse_integer(flag, text, -2147483648L, 2147483647L));
+}
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  for (std::string item; std::getline(ss, item, sep);) out.push_back(item);
+  return out;
+}
+
+void apply_common_flags(const FlagValues& f, v1::JobSpec& spec) {
+  auto has = [&](const char* k) { return f.count(k) > 0; };
+  auto val = [&](const char* k) { return f.at(k); };
+  if (has("--name")) spec.set_name(val("--name"));
+  if (has("--seed"))
+    spec.set_seed(static_cast<std::uint64_t>(parse_integer("--seed", val("--seed"), 0, LONG_MAX)));
+  if (has("--dt") && val("--dt") != "auto")
+    spec.mutable_run()->set_dt_ps(spec_number("--dt", val("--dt")));
+  if (has("--safety")) spec.mutable_run()->set_safety(spec_number("--safety", val("--safety")));
+  if (has("--threads")) spec.mutable_run()->set_threads(spec_int("--threads", val("--threads")));
+  if (has("--energy-every"))
+    spec.mutable_outputs()->set_energy_every_ps(
+        spec_number("--energy-every", val("--energy-every")));
+  if (has("--snapshot-every"))
+    spec.mutable_outputs()->set_snapshot_every_ps(
+        spec_number("--snapshot-every", val("--snapshot-every")));
+}
+
+const std::vector<SpecKind>& spec_kinds() {
+  static const std::vector<SpecKind> kinds = {twist_kind(), compression_kind()};
+  return kinds;
+}
+
+const SpecKind* find_spec_kind(const std::string& name) {
+  for (const SpecKind& k : spec_kinds())
+    if (k.name == name) return &k;
+  return nullptr;
+}
+
+std::string spec_kind_names() {
+  std::string names;
+  for (const SpecKind& k : spec_kinds()) names += (names.empty() ? "" : ", ") + k.name;
+  return names;
+}
+
+FlagSpec spec_flag_spec(const SpecKind& kind) {
+  FlagSpec fs;
+  fs.with_value.push_back("--spec");
+  for (const auto& [flag, field] : common_flag_fields()) fs.with_value.push_back(flag);
+  for (const auto& [flag, field] : kind.flag_fields()) {
+    std::vector<std::string>& names = kind.switches.count(flag) ? fs.switches : fs.with_value;
+    if (std::find(names.begin(), names.end(), flag) == names.end()) names.push_back(flag);
+  }
+  return fs;
+}
+
+v1::JobSpec spec_from_flags(const SpecKind& kind, const FlagValues& given) {
+  v1::JobSpec spec;
+  if (given.count("--spec")) spec = spec::load_file(given.at("--spec"));
+  if (spec.kind_case() != kind.kind_case && spec.kind_case() != v1::JobSpec::KIND_NOT_SET)
+    throw UsageError("--spec: the file describes another job kind (allowed here: " + kind.name +
+                     ")");
+  apply_common_flags(given, spec);
+  kind.apply_flags(given, spec);
+  return spec::finalize(spec);
+}
+
+std::string describe_spec_error(const spec::SpecError& e) {
+  std::ostringstream o;
+  for (const spec::FieldError& f : e.errors()) {
+    std::string flag;
+    auto match = [&](const FlagFields& fields) {
+      for (const auto& [fl, field] : fields)
+        if (flag.empty() && (f.field == field || f.field.rfind(field + "[", 0) == 0)) flag = fl;
+    };
+    match(common_flag_fields());
+    for (const SpecKind& k : spec_kinds()) match(k.flag_fields());
+    o << "  " << f.field << (flag.empty() ? "" : " (" + flag + ")") << ": " << f.message << "\n";
+  }
+  return o.str();
+}
+
+namespace {
+
+constexpr const char* kSpecFileHelp =
+    "Spec:\n"
+    "  --spec FILE          a JobSpec as JSON or YAML (.json/.yaml/.yml); flags override it\n";
+
+constexpr const char* kRunFlagsHelp =
+    "Run:\n"
+    "  --dt X|auto          time step, 1e-6..1 ps (default auto = safety x critical step)\n"
+    "  --safety X           fraction of the critical step, (0, 1] (default 0.6)\n"
+    "  --threads N          OpenMP threads, 0 = all cores (default 0)\n"
+    "  --energy-every X     energy/observable frame interval, ps (default 1)\n"
+    "  --snapshot-every X   snapshot interval, ps; 0 = none (default 10)\n"
+    "  --name TEXT          a label for `mdem ls`\n"
+    "  --seed N             random seed (default 1)\n";
+
+}  // namespace
+
+std::string spec_flags_help(const SpecKind& kind) {
+  return std::string(kSpecFileHelp) + kind.flags_help + kRunFlagsHelp;
+}
+
+std::string all_spec_flags_help() {
+  std::string s = kSpecFileHelp;
+  for (const SpecKind& k : spec_kinds()) s += "\n== " + k.name + " jobs ==\n" + k.flags_help;
+  return s + "\n" + kRunFlagsHelp;
+}
+
+}  // namespace mdem::cli
