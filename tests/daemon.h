@@ -1,14 +1,16 @@
 #pragma once
 // Starts a real mdemd process for the service tests: a temp data directory, a token file with
 // users alice, bob and an admin root, port 0 (the daemon writes the bound port to a file), and
-// stubs that carry a user's token.
+// stubs that carry a user's token; the job RPCs and the mdem binary as the service tests call them.
 #include <fcntl.h>
 #include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -20,6 +22,7 @@
 #include <vector>
 
 #include "mdem/v1/service.grpc.pb.h"
+#include "support.h"
 
 namespace mdem::testing {
 
@@ -108,12 +111,7 @@ class DaemonProcess {
   int port() const { return port_; }
   std::string address() const { return "127.0.0.1:" + std::to_string(port_); }
   fs::path data_dir() const { return dir_ / "data"; }
-  std::string log() const {
-    std::ifstream in(dir_ / "mdemd.log");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  }
+  std::string log() const { return slurp(dir_ / "mdemd.log"); }
   std::shared_ptr<grpc::Channel> channel() const { return channel_; }
   std::unique_ptr<v1::JobService::Stub> stub() const { return v1::JobService::NewStub(channel_); }
   // Resident memory of the daemon (kB), from /proc.
@@ -190,6 +188,79 @@ inline std::unique_ptr<grpc::ClientContext> ctx_for(const char* token, double de
     c->set_deadline(std::chrono::system_clock::now() +
                     std::chrono::milliseconds(static_cast<long>(deadline_s * 1000)));
   return c;
+}
+
+struct Submitted {
+  grpc::Status status;
+  v1::SubmitJobResponse resp;
+};
+
+inline Submitted submit(const DaemonProcess& d, const char* token, const std::string& request_id,
+                        const v1::JobSpec& spec) {
+  v1::SubmitJobRequest req;
+  req.set_request_id(request_id);
+  *req.mutable_spec() = spec;
+  Submitted s;
+  auto ctx = ctx_for(token);
+  s.status = d.stub()->SubmitJob(ctx.get(), req, &s.resp);
+  return s;
+}
+
+// submit, expecting it to succeed; the job id.
+inline std::string submit_ok(const DaemonProcess& d, const char* token, const std::string& rid,
+                             const v1::JobSpec& spec) {
+  const Submitted s = submit(d, token, rid, spec);
+  EXPECT_TRUE(s.status.ok()) << s.status.error_message();
+  return s.resp.job().job_id();
+}
+
+inline v1::JobInfo get(const DaemonProcess& d, const char* token, const std::string& id,
+                       grpc::Status* status = nullptr) {
+  v1::GetJobRequest req;
+  req.set_job_id(id);
+  v1::JobInfo info;
+  auto ctx = ctx_for(token);
+  const grpc::Status s = d.stub()->GetJob(ctx.get(), req, &info);
+  if (status) *status = s;
+  return info;
+}
+
+// Reads a job's events from from_seq until the stream ends (or max_events were read), within
+// deadline_s.
+inline std::vector<v1::JobEvent> watch(const DaemonProcess& d, const char* token,
+                                       const std::string& id, long from_seq, long max_events = -1,
+                                       grpc::Status* status = nullptr, double deadline_s = 300) {
+  v1::WatchJobRequest req;
+  req.set_job_id(id);
+  req.set_from_seq(from_seq);
+  auto ctx = ctx_for(token, deadline_s);
+  auto stub = d.stub();
+  auto reader = stub->WatchJob(ctx.get(), req);
+  std::vector<v1::JobEvent> out;
+  v1::JobEvent e;
+  while ((max_events < 0 || static_cast<long>(out.size()) < max_events) && reader->Read(&e))
+    out.push_back(e);
+  if (max_events >= 0 && static_cast<long>(out.size()) == max_events) ctx->TryCancel();
+  const grpc::Status s = reader->Finish();
+  if (status) *status = s;
+  return out;
+}
+
+// The mdem binary with `args` (one shell word string), without the user's settings; stderr is
+// appended to DIR/cli.err. Its exit code and stdout.
+inline CliResult mdem_cli(const fs::path& dir, const std::string& args) {
+  const std::string cmd = "env -u MDEM_SERVER -u MDEM_TOKEN -u MDEM_CONFIG -u MDEM_DB " +
+                          std::string(MDEM_CLI_PATH) + " " + args + " 2>>" +
+                          (dir / "cli.err").string();
+  return run_shell(cmd);
+}
+
+// `mdem submit ARGS --watch --json` to the daemon d as alice (her token in DIR/alice.token).
+inline CliResult mdem_submit_watch(const DaemonProcess& d, const fs::path& dir,
+                                   const std::string& args) {
+  std::ofstream(dir / "alice.token") << kAliceToken << "\n";
+  return mdem_cli(dir, "submit " + args + " --server " + d.address() + " --token-file " +
+                           (dir / "alice.token").string() + " --watch --json");
 }
 
 }  // namespace mdem::testing

@@ -41,40 +41,6 @@ JobSpec small_spec(double hold_ps, double snapshot_every_ps = 0, double energy_e
   return s;
 }
 
-struct Submitted {
-  grpc::Status status;
-  mdem::v1::SubmitJobResponse resp;
-};
-
-Submitted submit(const DaemonProcess& d, const char* token, const std::string& request_id,
-                 const JobSpec& spec) {
-  mdem::v1::SubmitJobRequest req;
-  req.set_request_id(request_id);
-  *req.mutable_spec() = spec;
-  Submitted s;
-  auto ctx = ctx_for(token);
-  s.status = d.stub()->SubmitJob(ctx.get(), req, &s.resp);
-  return s;
-}
-
-std::string submit_ok(const DaemonProcess& d, const char* token, const std::string& rid,
-                      const JobSpec& spec) {
-  const Submitted s = submit(d, token, rid, spec);
-  EXPECT_TRUE(s.status.ok()) << s.status.error_message();
-  return s.resp.job().job_id();
-}
-
-JobInfo get(const DaemonProcess& d, const char* token, const std::string& id,
-            grpc::Status* status = nullptr) {
-  mdem::v1::GetJobRequest req;
-  req.set_job_id(id);
-  JobInfo info;
-  auto ctx = ctx_for(token);
-  const grpc::Status s = d.stub()->GetJob(ctx.get(), req, &info);
-  if (status) *status = s;
-  return info;
-}
-
 bool finished(JobState s) {
   return s == mdem::v1::SUCCEEDED || s == mdem::v1::FAILED || s == mdem::v1::CANCELLED;
 }
@@ -97,25 +63,6 @@ JobInfo wait_for(const DaemonProcess& d, const std::string& id, Pred pred, doubl
 JobInfo wait_finished(const DaemonProcess& d, const std::string& id, double timeout_s = 120) {
   return wait_for(
       d, id, [](const JobInfo& j) { return finished(j.state()); }, timeout_s);
-}
-
-// Reads a job's events from from_seq until the stream ends (or max_events were read).
-std::vector<JobEvent> watch(const DaemonProcess& d, const char* token, const std::string& id,
-                            long from_seq, long max_events = -1, grpc::Status* status = nullptr) {
-  mdem::v1::WatchJobRequest req;
-  req.set_job_id(id);
-  req.set_from_seq(from_seq);
-  auto ctx = ctx_for(token, 300);
-  auto stub = d.stub();
-  auto reader = stub->WatchJob(ctx.get(), req);
-  std::vector<JobEvent> out;
-  JobEvent e;
-  while ((max_events < 0 || static_cast<long>(out.size()) < max_events) && reader->Read(&e))
-    out.push_back(e);
-  if (max_events >= 0 && static_cast<long>(out.size()) == max_events) ctx->TryCancel();
-  const grpc::Status s = reader->Finish();
-  if (status) *status = s;
-  return out;
 }
 
 std::vector<JobEvent> of_kind(const std::vector<JobEvent>& ev, JobEvent::EventCase k) {
@@ -575,13 +522,6 @@ TEST(Server, FairOrderBetweenUsersAndPerUserLimits) {
 
 namespace {
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 // --tls-cert/--tls-key: a TLS client that trusts the certificate is served; a plaintext client
 // is not.
 TEST(Server, ServesTlsWhenGivenACertificate) {
@@ -611,35 +551,16 @@ TEST(Server, ServesTlsWhenGivenACertificate) {
 
 namespace {
 
-struct CliResult {
-  int code;
-  std::string out;
-};
-
-CliResult mdem_cli(const fs::path& dir, const std::string& args) {
-  const std::string cmd =
-      std::string(MDEM_CLI_PATH) + " " + args + " 2>>" + (dir / "cli.err").string();
-  FILE* p = ::popen(cmd.c_str(), "r");
-  std::string out;
-  char buf[4096];
-  while (std::size_t n = std::fread(buf, 1, sizeof buf, p)) out.append(buf, n);
-  const int status = ::pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
-
 // `mdem submit --watch` stores the daemon's results in the local database, where `mdem export`
 // reads them exactly as those of `mdem run`: the same job gives the same CSV, bit for bit.
 TEST(Server, CliSubmitWatchExportsLikeAnEmbeddedRun) {
   const fs::path dir = fresh_dir("cli");
   DaemonProcess d(dir);
-  std::ofstream(dir / "alice.token") << kAliceToken << "\n";
   const std::string job =
       "twist --layers 2 --length 13.56 --torque 2 --hold 10 --threads 1 "
       "--temperature 300 --snapshot-every 5 ";
   const std::string db = " --db " + (dir / "results.db").string();
-  const CliResult sub =
-      mdem_cli(dir, "submit " + job + db + " --server " + d.address() + " --token-file " +
-                        (dir / "alice.token").string() + " --watch --json");
+  const CliResult sub = mdem_submit_watch(d, dir, job + db);
   ASSERT_EQ(sub.code, 0) << sub.out << slurp(dir / "cli.err");
   const std::string remote_id = nlohmann::json::parse(sub.out)["job_id"];
   const CliResult run = mdem_cli(dir, "run " + job + db + " --json");

@@ -82,17 +82,20 @@ Status JobServiceImpl::SubmitJob(grpc::ServerContext* ctx, const v1::SubmitJobRe
     const int threads = spec.run().threads() > 0
                             ? std::min(spec.run().threads(), config_.threads_per_job)
                             : config_.threads_per_job;
-    long elements = 0, total_steps = 0;
-    try {
-      std::unique_ptr<Job> job = make_spec_job(spec, 1);
-      job->system().initialize();  // refuses a time step above the safe limit
-      elements = static_cast<long>(job->system().elements().size());
-      total_steps = static_cast<long>(std::ceil(job->duration() / job->system().dt() - 1e-9));
-    } catch (const std::invalid_argument& e) {  // ConfigError included
-      return Status(StatusCode::INVALID_ARGUMENT, std::string("invalid job: ") + e.what());
-    } catch (const NumericalError& e) {
-      return Status(StatusCode::INVALID_ARGUMENT, std::string("invalid job: ") + e.what());
-    }
+    // A quick scene is built here, so a bad time step is refused before anything is queued; a
+    // scene that needs a simulation of its own (packing) is built by the worker, which checks
+    // the time step and the step limit there (total_steps 0 until then).
+    long elements = bound, total_steps = 0;
+    if (builds_quickly(spec)) try {
+        std::unique_ptr<Job> job = make_spec_job(spec, 1);
+        job->system().initialize();  // refuses a time step above the safe limit
+        elements = static_cast<long>(job->system().elements().size());
+        total_steps = static_cast<long>(std::ceil(job->duration() / job->system().dt() - 1e-9));
+      } catch (const std::invalid_argument& e) {  // ConfigError included
+        return Status(StatusCode::INVALID_ARGUMENT, std::string("invalid job: ") + e.what());
+      } catch (const NumericalError& e) {
+        return Status(StatusCode::INVALID_ARGUMENT, std::string("invalid job: ") + e.what());
+      }
     if (total_steps > config_.max_steps)
       return Status(StatusCode::RESOURCE_EXHAUSTED,
                     "the job needs " + std::to_string(total_steps) + " steps, above this " +

@@ -323,6 +323,7 @@ long JobStore::append_locked(const std::string& job_id, std::vector<v1::JobEvent
       case v1::JobEvent::kProgress:
         r.last_progress_step = e.progress().step();
         r.step = std::max(r.step, e.progress().step());
+        if (e.progress().total_steps() > 0) r.total_steps = e.progress().total_steps();
         break;
       case v1::JobEvent::kColumns:
         r.columns_logged = true;
@@ -352,7 +353,7 @@ long JobStore::append_locked(const std::string& job_id, std::vector<v1::JobEvent
   Query(db_,
         "UPDATE jobs SET state = ?, reason = ?, started_at = ?, finished_at = ?, step = ?, "
         "last_seq = ?, last_frame_step = ?, last_snapshot_step = ?, last_progress_step = ?, "
-        "columns_logged = ?, report_json = ? WHERE id = ?",
+        "columns_logged = ?, report_json = ?, total_steps = ? WHERE id = ?",
         "cannot update the job")
       .bind(1, static_cast<long>(r.state))
       .bind(2, r.reason)
@@ -365,7 +366,8 @@ long JobStore::append_locked(const std::string& job_id, std::vector<v1::JobEvent
       .bind(9, r.last_progress_step)
       .bind(10, static_cast<long>(r.columns_logged))
       .bind(11, r.report_json)
-      .bind(12, job_id)
+      .bind(12, r.total_steps)
+      .bind(13, job_id)
       .run();
   return r.last_seq;
 }

@@ -134,6 +134,15 @@ void Scheduler::worker() {
   }
 }
 
+void Scheduler::check_steps(Job& job) const {
+  job.system().initialize();
+  const double steps = std::ceil(job.duration() / job.system().dt() - 1e-9);
+  if (steps > static_cast<double>(config_.max_steps))
+    throw std::invalid_argument("the job needs " + std::to_string(static_cast<long>(steps)) +
+                                " steps, above this daemon's limit max_steps = " +
+                                std::to_string(config_.max_steps) + "; shorten it or raise dt");
+}
+
 void Scheduler::run(const JobRow& row, Control& ctl) {
   spdlog::info("event=job_start job={} user={} kind={} elements={} threads={} resume_step={}",
                row.id, row.user, row.kind, row.elements, row.threads, row.checkpoint_step);
@@ -145,6 +154,7 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
   std::string state = "SUCCEEDED", reason;
   try {
     job = make_spec_job(row.spec, row.threads);
+    if (row.total_steps <= 0 && row.checkpoint_step == 0) check_steps(*job);
     if (row.checkpoint_step > 0) try {
         const CheckpointData data = read_checkpoint(ckpt);
         load_checkpoint(*job, data.state);
@@ -226,6 +236,10 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
   } catch (const NumericalError& e) {
     state = "FAILED";
     reason = e.what();
+  } catch (const std::invalid_argument& e) {  // a scene built only here (ConfigError included)
+    job.reset();
+    state = "FAILED";
+    reason = std::string("invalid job: ") + e.what();
   } catch (const CheckpointFileError& e) {
     state = "FAILED";
     reason = e.what();

@@ -15,6 +15,7 @@
 #include "config.h"
 #include "event_writer.h"
 #include "job_store.h"
+#include "mdem/job.h"
 
 namespace mdem::server {
 
@@ -44,6 +45,9 @@ class Scheduler {
   };
   void worker();
   void run(const JobRow& row, Control& ctl);
+  // For a job built only by the worker: initializes it (which checks the time step) and throws
+  // std::invalid_argument when it needs more steps than max_steps.
+  void check_steps(Job& job) const;
 
   DaemonConfig config_;
   JobStore& store_;
