@@ -23,6 +23,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
@@ -43,6 +44,7 @@ struct Options {
   int threads = 0;
   double speed = 0.02;  // nm/ps per platen
   bool quick = false, cube_only = false;
+  bool carve = false;  // hertz: spheres carved out of a bulk cube packing, not packed in a sphere
   fs::path out = ".";
   // hertz
   double radius = 50, gmin = 1, gmax = 2, porosity = 0.4, cube_half = 12, strain = 0.1;
@@ -57,12 +59,12 @@ struct Options {
 
 [[noreturn]] void usage(const std::string& msg) {
   std::fprintf(stderr, "validate_compression: %s\n", msg.c_str());
-  std::fprintf(
-      stderr,
-      "usage: validate_compression hertz|au|cds [--threads N] [--speed V] [--quick] "
-      "[--out DIR]\n  hertz: [--radius R] [--grains MIN,MAX] [--porosity P] "
-      "[--realisations N] [--cube-half A] [--cube-only] [--strain S] [--seed K]\n  au: [--sigmas "
-      "LIST] [--peak H]   cds: [--peaks LIST] [--grains MIN,MAX]\n");
+  std::fprintf(stderr,
+               "usage: validate_compression hertz|au|cds [--threads N] [--speed V] [--quick] "
+               "[--out DIR]\n  hertz: [--radius R] [--grains MIN,MAX] [--porosity P] "
+               "[--realisations N] [--cube-half A] [--cube-only] [--carve] [--strain S] [--seed "
+               "K]\n  au: [--sigmas "
+               "LIST] [--peak H]   cds: [--peaks LIST] [--grains MIN,MAX]\n");
   std::exit(2);
 }
 
@@ -103,6 +105,8 @@ Options parse(int argc, char** argv) {
       o.quick = true;
     else if (a == "--cube-only")
       o.cube_only = true;
+    else if (a == "--carve")
+      o.carve = true;
     else if (a == "--out")
       o.out = val();
     else if (a == "--radius")
@@ -237,6 +241,39 @@ CompressionJobSpec base_spec(PackingShape shape, double r_outer, double r_inner,
   return s;
 }
 
+// The grains of a cube packing whose centres lie within R − r of its centre, with the touching
+// pairs among them: a sphere with no wall-ordered skin.
+PackedParticle carve_sphere(const PackedParticle& cube, double R) {
+  const Elements& g = cube.grains;
+  Vec3 c = Vec3::Zero();
+  for (const Vec3& x : g.x) c += x;
+  c /= static_cast<double>(g.size());
+  PackedParticle out = cube;
+  out.grains = Elements();
+  std::vector<long> index(g.size(), -1);
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    if ((g.x[i] - c).norm() + g.radius[i] > R) continue;
+    ElementInit e;
+    e.kind = g.kind[i];
+    e.x = g.x[i] - c;
+    e.q = g.q[i];
+    e.mass = g.mass[i];
+    e.inertia = g.inertia[i];
+    e.radius = g.radius[i];
+    index[i] = static_cast<long>(out.grains.add(e));
+  }
+  out.touching.clear();
+  std::vector<int> degree(out.grains.size(), 0);
+  for (const auto& [i, j] : cube.touching)
+    if (index[i] >= 0 && index[j] >= 0) {
+      out.touching.emplace_back(index[i], index[j]);
+      ++degree[index[i]];
+      ++degree[index[j]];
+    }
+  out.rattlers = std::count(degree.begin(), degree.end(), 0);
+  return out;
+}
+
 // ---- hertz ------------------------------------------------------------------------------------
 
 int hertz(const Options& o) {
@@ -314,7 +351,17 @@ int hertz(const Options& o) {
     ss.loading.peak_displacement = o.strain * o.radius;
     ss.loading.unload = false;
     t0 = Clock::now();
-    CompressionJob sphere(ss, settings(o));
+    std::unique_ptr<CompressionJob> made;
+    if (o.carve) {
+      PackingSpec bulk = ss.particle;
+      bulk.shape = PackingShape::Cube;
+      bulk.r_outer = o.radius + 2 * o.gmax;  // the carved sphere stays clear of the cube's faces
+      made = std::make_unique<CompressionJob>(carve_sphere(pack_grains(bulk), o.radius), ss,
+                                              settings(o));
+    } else {
+      made = std::make_unique<CompressionJob>(ss, settings(o));
+    }
+    CompressionJob& sphere = *made;
     const double pack_s = seconds_since(t0);
     RunResult r = run(sphere, ss.loading.peak_displacement / (2 * o.speed) / 200, o, false);
     std::vector<double> lx, ly, c;

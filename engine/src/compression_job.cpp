@@ -8,6 +8,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "mdem/linear_contact.h"
 #include "mdem/planar_wall.h"
@@ -60,8 +61,12 @@ Elements with_platens(const PackedParticle& packed, const PackingSpec& p) {
 }  // namespace
 
 CompressionJob::CompressionJob(const CompressionJobSpec& spec, IntegratorSettings settings)
-    : packed_(pack_grains(packing_spec(validated(spec), settings))),
-      sys_(with_platens(packed_, spec.particle), settings) {
+    : CompressionJob(pack_grains(packing_spec(validated(spec), settings)), spec, settings) {}
+
+CompressionJob::CompressionJob(PackedParticle packed, const CompressionJobSpec& spec,
+                               IntegratorSettings settings)
+    : packed_(std::move(packed)), sys_(with_platens(packed_, spec.particle), settings) {
+  validated(spec);
   const PackingSpec& p = spec.particle;
   n_grains_ = packed_.grains.size();
   top_ = n_grains_;

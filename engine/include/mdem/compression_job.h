@@ -31,6 +31,10 @@ class CompressionJob final : public Job {
   // Packs the particle (pack_grains), bonds every touching pair, places the platens touching
   // the particle's top and bottom. Throws std::invalid_argument for an impossible spec.
   CompressionJob(const CompressionJobSpec& spec, IntegratorSettings settings);
+  // The same with a particle packed by the caller (e.g. carved out of a bulk packing); the spec's
+  // particle gives the material, the largest grain radius and the platens' lateral size.
+  CompressionJob(PackedParticle packed, const CompressionJobSpec& spec,
+                 IntegratorSettings settings);
   CompressionJob(const CompressionJob&) = delete;
   CompressionJob& operator=(const CompressionJob&) = delete;
 
