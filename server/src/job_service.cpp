@@ -24,6 +24,17 @@ Status internal(const std::exception& e) {
 
 }  // namespace
 
+template <class Body>
+Status JobServiceImpl::as_user(const grpc::ServerContext* ctx, Body&& body) const {
+  Identity who;
+  if (Status s = authenticate(ctx, who); !s.ok()) return s;
+  try {
+    return body(static_cast<const Identity&>(who));
+  } catch (const std::exception& e) {
+    return internal(e);
+  }
+}
+
 Status JobServiceImpl::authenticate(const grpc::ServerContext* ctx, Identity& who) const {
   const auto& md = ctx->client_metadata();
   auto it = md.find("authorization");
@@ -59,14 +70,12 @@ Status JobServiceImpl::visible_job(const Identity& who, const std::string& id, J
 
 Status JobServiceImpl::SubmitJob(grpc::ServerContext* ctx, const v1::SubmitJobRequest* req,
                                  v1::SubmitJobResponse* resp) {
-  Identity who;
-  if (Status s = authenticate(ctx, who); !s.ok()) return s;
-  static const std::regex id_re("[A-Za-z0-9._:-]{1,128}");
-  if (!std::regex_match(req->request_id(), id_re))
-    return Status(StatusCode::INVALID_ARGUMENT,
-                  "request_id: '" + req->request_id().substr(0, 200) +
-                      "' is not 1..128 characters of [A-Za-z0-9._:-]");
-  try {
+  return as_user(ctx, [&](const Identity& who) -> Status {
+    static const std::regex id_re("[A-Za-z0-9._:-]{1,128}");
+    if (!std::regex_match(req->request_id(), id_re))
+      return Status(StatusCode::INVALID_ARGUMENT,
+                    "request_id: '" + req->request_id().substr(0, 200) +
+                        "' is not 1..128 characters of [A-Za-z0-9._:-]");
     v1::JobSpec spec;
     try {
       spec = spec::finalize(req->spec());
@@ -116,49 +125,37 @@ Status JobServiceImpl::SubmitJob(grpc::ServerContext* ctx, const v1::SubmitJobRe
       scheduler_.wake();
     }
     return Status::OK;
-  } catch (const std::exception& e) {
-    return internal(e);
-  }
+  });
 }
 
 Status JobServiceImpl::GetJob(grpc::ServerContext* ctx, const v1::GetJobRequest* req,
                               v1::JobInfo* resp) {
-  Identity who;
-  if (Status s = authenticate(ctx, who); !s.ok()) return s;
-  try {
+  return as_user(ctx, [&](const Identity& who) -> Status {
     JobRow row;
     if (Status s = visible_job(who, req->job_id(), row); !s.ok()) return s;
     *resp = row.info();
     return Status::OK;
-  } catch (const std::exception& e) {
-    return internal(e);
-  }
+  });
 }
 
 Status JobServiceImpl::ListJobs(grpc::ServerContext* ctx, const v1::ListJobsRequest* req,
                                 v1::ListJobsResponse* resp) {
-  Identity who;
-  if (Status s = authenticate(ctx, who); !s.ok()) return s;
-  if (req->all_users() && !who.admin)
-    return Status(StatusCode::PERMISSION_DENIED, "all_users: only admins list everyone's jobs");
-  if (req->limit() < 0 || req->limit() > 1000)
-    return Status(StatusCode::INVALID_ARGUMENT,
-                  "limit: " + std::to_string(req->limit()) + " is not in [0, 1000] (0 = 100)");
-  try {
+  return as_user(ctx, [&](const Identity& who) -> Status {
+    if (req->all_users() && !who.admin)
+      return Status(StatusCode::PERMISSION_DENIED, "all_users: only admins list everyone's jobs");
+    if (req->limit() < 0 || req->limit() > 1000)
+      return Status(StatusCode::INVALID_ARGUMENT,
+                    "limit: " + std::to_string(req->limit()) + " is not in [0, 1000] (0 = 100)");
     const int limit = req->limit() == 0 ? 100 : req->limit();
     for (const JobRow& r : store_.list(req->all_users() ? "" : who.user, limit))
       *resp->add_jobs() = r.info();
     return Status::OK;
-  } catch (const std::exception& e) {
-    return internal(e);
-  }
+  });
 }
 
 Status JobServiceImpl::CancelJob(grpc::ServerContext* ctx, const v1::CancelJobRequest* req,
                                  v1::JobInfo* resp) {
-  Identity who;
-  if (Status s = authenticate(ctx, who); !s.ok()) return s;
-  try {
+  return as_user(ctx, [&](const Identity& who) -> Status {
     JobRow row;
     if (Status s = visible_job(who, req->job_id(), row); !s.ok()) return s;
     if (!row.finished()) {
@@ -175,16 +172,12 @@ Status JobServiceImpl::CancelJob(grpc::ServerContext* ctx, const v1::CancelJobRe
     }
     *resp = row.info();
     return Status::OK;
-  } catch (const std::exception& e) {
-    return internal(e);
-  }
+  });
 }
 
 Status JobServiceImpl::WatchJob(grpc::ServerContext* ctx, const v1::WatchJobRequest* req,
                                 grpc::ServerWriter<v1::JobEvent>* writer) {
-  Identity who;
-  if (Status s = authenticate(ctx, who); !s.ok()) return s;
-  try {
+  return as_user(ctx, [&](const Identity& who) -> Status {
     JobRow row;
     if (Status s = visible_job(who, req->job_id(), row); !s.ok()) return s;
     if (req->from_seq() < 0 || req->from_seq() > row.last_seq + 1)
@@ -205,9 +198,7 @@ Status JobServiceImpl::WatchJob(grpc::ServerContext* ctx, const v1::WatchJobRequ
       hub_.wait(gen, std::chrono::milliseconds(500));
     }
     return Status(StatusCode::CANCELLED, "the watcher went away");
-  } catch (const std::exception& e) {
-    return internal(e);
-  }
+  });
 }
 
 }  // namespace mdem::server

@@ -31,6 +31,10 @@ class JobServiceImpl final : public v1::JobService::Service {
  private:
   // The caller, or UNAUTHENTICATED.
   grpc::Status authenticate(const grpc::ServerContext* ctx, Identity& who) const;
+  // Every RPC: authenticates the caller, then runs body(who); an exception it throws becomes
+  // INTERNAL (logged), never a dropped connection.
+  template <class Body>
+  grpc::Status as_user(const grpc::ServerContext* ctx, Body&& body) const;
   // The job if it exists and the caller may see it; NOT_FOUND / PERMISSION_DENIED otherwise.
   grpc::Status visible_job(const Identity& who, const std::string& id, JobRow& row);
 
