@@ -472,7 +472,7 @@ TEST(CompressionJob, SlipSnapshotsAndFragmentsOfAFreshParticle) {
   const std::vector<double> slip = job.slip();
   ASSERT_EQ(slip.size(), job.system().elements().size());
   for (double v : slip) EXPECT_NEAR(v, 0.0, 1e-12);  // the rigid fit's round-off
-  EXPECT_EQ(job.platen_force_nN(), 0.0);  // the platens just touch
+  EXPECT_EQ(job.platen_force_nN(), 0.0);             // the platens just touch
   EXPECT_EQ(job.displacement(), 0.0);
   std::vector<Snapshot> snaps;
   JobObserver o;

@@ -1,6 +1,7 @@
 // Grains and platens of granular scenes (grain.h, model.md §2, §6).
 #include "mdem/grain.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -63,6 +64,33 @@ std::size_t add_platen(Elements& el, const Vec3& point, const Vec3& normal, doub
   const std::size_t k = el.add(platen_element(point, normal, mass, radius));
   el.fix_all(k);
   return k;
+}
+
+double grain_contact_stiffness(double youngs, double ri, double rj, double section_radius) {
+  return std::numbers::pi * section_radius * section_radius * (0.5 * youngs) / (ri + rj);
+}
+
+double grain_contact_stiffness(double youngs, double ri, double rj) {
+  return grain_contact_stiffness(youngs, ri, rj, std::min(ri, rj));
+}
+
+double wall_contact_stiffness(double youngs, double radius) {
+  return std::numbers::pi * radius * youngs;
+}
+
+void PlatenPlanes::update(const Elements& el) {
+  if (scanned_ != el.size()) {
+    index_.clear();
+    for (std::size_t i = 0; i < el.size(); ++i)
+      if (el.kind[i] == ElementKind::Wall) index_.push_back(i);
+    point_.resize(index_.size());
+    normal_.resize(index_.size());
+    scanned_ = el.size();
+  }
+  for (std::size_t w = 0; w < index_.size(); ++w) {
+    point_[w] = el.x[index_[w]];
+    normal_[w] = (el.q[index_[w]] * Vec3::UnitZ()).normalized();
+  }
 }
 
 }  // namespace mdem

@@ -48,9 +48,9 @@ BondStress stress_of(const GrainBondRecord& rec, const BondDeformation& d) {
   return s;
 }
 
-// Normal stiffness of the linear contact of a broken pair (Eq. 36, one material: E/2).
+// Normal stiffness of the linear contact of a broken pair: Eq. 36 over the neck's section.
 double broken_contact_stiffness(const GrainBondRecord& rec, double youngs, double ri, double rj) {
-  return section_area(rec.radius) * (0.5 * youngs) / (ri + rj);
+  return grain_contact_stiffness(youngs, ri, rj, rec.radius);
 }
 
 // Return mapping of one plastic bond at the current state: moves the plastic offset so that
@@ -306,31 +306,6 @@ void GrainBond::load_state(StateReader& r) {
 // ---------------------------------------------------------------------------------------------
 // GrainDashpots
 
-namespace {
-
-double grain_contact_stiffness(double youngs, double ri, double rj) {
-  const double rmin = std::min(ri, rj);
-  return kPi * rmin * rmin * (0.5 * youngs) / (ri + rj);
-}
-
-struct Platens {
-  std::vector<std::size_t> index;
-  std::vector<Vec3> point, normal;
-};
-
-Platens find_platens(const Elements& el) {
-  Platens p;
-  for (std::size_t i = 0; i < el.size(); ++i) {
-    if (el.kind[i] != ElementKind::Wall) continue;
-    p.index.push_back(i);
-    p.point.push_back(el.x[i]);
-    p.normal.push_back((el.q[i] * Vec3::UnitZ()).normalized());
-  }
-  return p;
-}
-
-}  // namespace
-
 GrainDashpots::GrainDashpots(double ratio, const GrainBond* bonds, double contact_youngs,
                              double max_radius)
     : ratio_(ratio), bonds_(bonds), contact_youngs_(contact_youngs), max_radius_(max_radius) {
@@ -353,8 +328,8 @@ void GrainDashpots::compute(const Elements& el, const NeighborList* pairs, Force
   if (!sink.has_damping())
     throw std::logic_error("grain_dashpots: force sink has no damping buffers");
   const long n = static_cast<long>(el.size());
-  const Platens platens = find_platens(el);
-  const std::size_t nw = platens.index.size();
+  platens_.update(el);
+  const std::size_t nw = platens_.size();
   static const std::vector<GrainBondRecord> kNone;
   const std::vector<GrainBondRecord>& recs = bonds_ ? bonds_->bonds() : kNone;
   const double bond_youngs = bonds_ ? bonds_->params().material.youngs : 0.0;
@@ -426,10 +401,10 @@ void GrainDashpots::compute(const Elements& el, const NeighborList* pairs, Force
         if (el.kind[i] != ElementKind::Grain) continue;
         const double R = radius[i];
         for (std::size_t w = 0; w < nw; ++w) {
-          const Vec3& nrm = platens.normal[w];
-          if (R - nrm.dot(x[i] - platens.point[w]) <= 0) continue;
-          const std::size_t p = platens.index[w];
-          const double c = beta2 * std::sqrt(mass[i] * kPi * R * contact_youngs_);
+          const Vec3& nrm = platens_.normal(w);
+          if (R - platens_.height(w, x[i]) <= 0) continue;
+          const std::size_t p = platens_.index(w);
+          const double c = beta2 * std::sqrt(mass[i] * wall_contact_stiffness(contact_youngs_, R));
           const Vec3 fi = (-c * nrm.dot(v[i] - v[p])) * nrm;
           fd[i] += fi;
           fd[p] -= fi;
@@ -471,15 +446,15 @@ void GrainDashpots::add_stiffness(const Elements& el, const NeighborList* pairs,
       }
     }
   }
-  const Platens platens = find_platens(el);
-  for (std::size_t w = 0; w < platens.index.size(); ++w) {
+  platens_.update(el);
+  for (std::size_t w = 0; w < platens_.size(); ++w) {
     for (std::size_t i = 0; i < el.size(); ++i) {
       if (el.kind[i] != ElementKind::Grain) continue;
       const double R = el.radius[i];
       // The grains within a diameter of touching it (as PlanarWallContact counts them); the
       // platen moves as prescribed, so only the grain's row sees the dashpot.
-      if (platens.normal[w].dot(el.x[i] - platens.point[w]) >= 3.0 * R) continue;
-      s.c[i] += beta2 * std::sqrt(el.mass[i] * kPi * R * contact_youngs_);
+      if (platens_.height(w, el.x[i]) >= 3.0 * R) continue;
+      s.c[i] += beta2 * std::sqrt(el.mass[i] * wall_contact_stiffness(contact_youngs_, R));
     }
   }
 }

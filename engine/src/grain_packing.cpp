@@ -213,7 +213,7 @@ ContactStats contact_stats(const System& sys, const LinearContact& contact, cons
   }
   for (std::size_t i = 0; i < n_grains; ++i) {
     const double R = el.radius[i];
-    const double k = kPi * R * s.material.youngs;
+    const double k = wall_contact_stiffness(s.material.youngs, R);
     auto wall = [&](double u) {
       if (u > 0) {
         st.force += k * u;

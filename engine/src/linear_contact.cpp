@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "mdem/grain.h"
 #include "mdem/grain_bond.h"
 #include "mdem/neighbor_list.h"
 
@@ -30,9 +31,7 @@ bool LinearContact::excludes(const Elements& el, std::size_t i, std::size_t j) c
 }
 
 double LinearContact::stiffness(double ri, double rj) const {
-  // One material: 1/E* = 1/E + 1/E, so E* = E/2.
-  const double rmin = std::min(ri, rj);
-  return std::numbers::pi * rmin * rmin * (0.5 * youngs_) / (ri + rj);
+  return grain_contact_stiffness(youngs_, ri, rj);
 }
 
 double LinearContact::force(double ri, double rj, double r) const {

@@ -17,28 +17,14 @@ PlanarWallContact::PlanarWallContact(double youngs) : youngs_(youngs) {
 }
 
 double PlanarWallContact::stiffness(double radius) const {
-  return std::numbers::pi * radius * youngs_;
-}
-
-void PlanarWallContact::find_walls(const Elements& el) const {
-  if (scanned_ == el.size()) return;
-  walls_.clear();
-  for (std::size_t i = 0; i < el.size(); ++i)
-    if (el.kind[i] == ElementKind::Wall) walls_.push_back(i);
-  scanned_ = el.size();
+  return wall_contact_stiffness(youngs_, radius);
 }
 
 void PlanarWallContact::compute(const Elements& el, const NeighborList*, ForceSink& sink) const {
-  find_walls(el);
-  if (walls_.empty()) return;
+  platens_.update(el);
+  if (platens_.size() == 0) return;
   const long n = static_cast<long>(el.size());
-  const std::size_t nw = walls_.size();
-  // Each platen's plane: a point and the unit normal towards the material.
-  std::vector<Vec3> point(nw), normal(nw);
-  for (std::size_t w = 0; w < nw; ++w) {
-    point[w] = el.x[walls_[w]];
-    normal[w] = (el.q[walls_[w]] * Vec3::UnitZ()).normalized();
-  }
+  const std::size_t nw = platens_.size();
 #pragma omp parallel num_threads(sink.threads()) if (n >= kParallelMinItems)
   {
     const int tid = omp_get_thread_num();
@@ -49,14 +35,14 @@ void PlanarWallContact::compute(const Elements& el, const NeighborList*, ForceSi
       if (el.kind[i] != ElementKind::Grain) continue;
       const double R = el.radius[i];
       for (std::size_t w = 0; w < nw; ++w) {
-        const double u = R - normal[w].dot(el.x[i] - point[w]);
+        const double u = R - platens_.height(w, el.x[i]);
         if (u <= 0) continue;
         const double k = stiffness(R);
-        const Vec3 F = (k * u) * normal[w];
+        const Vec3 F = (k * u) * platens_.normal(w);
         f[i] += F;
         // The reaction on the platen: a force only (its rotation is never free), so the system
         // books the work of its prescribed motion and a protocol reads the platen force.
-        f[walls_[w]] -= F;
+        f[platens_.index(w)] -= F;
         energy += 0.5 * k * u * u;
       }
     }
@@ -66,16 +52,14 @@ void PlanarWallContact::compute(const Elements& el, const NeighborList*, ForceSi
 
 void PlanarWallContact::add_stiffness(const Elements& el, const NeighborList*,
                                       StiffnessSums& s) const {
-  find_walls(el);
-  for (std::size_t w : walls_) {
-    const Vec3 p = el.x[w];
-    const Vec3 nrm = (el.q[w] * Vec3::UnitZ()).normalized();
+  platens_.update(el);
+  for (std::size_t w = 0; w < platens_.size(); ++w) {
     for (std::size_t i = 0; i < el.size(); ++i) {
       if (el.kind[i] != ElementKind::Grain) continue;
       const double R = el.radius[i];
       // Grains within a diameter of touching the platen: those it meets first as it advances (the
       // ones behind are shielded by them).
-      if (nrm.dot(el.x[i] - p) >= 3.0 * R) continue;
+      if (platens_.height(w, el.x[i]) >= 3.0 * R) continue;
       // A platen moves as prescribed: its spring adds k/m to the grain's ω² with no coupling
       // block, and the system doubles kt for the coupling of free pairs, hence k/2.
       s.kt[i] += 0.5 * stiffness(R);

@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "mdem/grain.h"
+
 namespace mdem {
 
 SphericalWallContact::SphericalWallContact(const Vec3& centre, double r_outer, double r_inner,
@@ -33,7 +35,6 @@ void SphericalWallContact::set_radii(double r_outer, double r_inner) {
 
 void SphericalWallContact::compute(const Elements& el, const NeighborList*, ForceSink& sink) const {
   const long n = static_cast<long>(el.size());
-  const double pi = std::numbers::pi;
 #pragma omp parallel num_threads(sink.threads()) if (n >= kParallelMinItems)
   {
     const int tid = omp_get_thread_num();
@@ -43,7 +44,7 @@ void SphericalWallContact::compute(const Elements& el, const NeighborList*, Forc
     for (long i = 0; i < n; ++i) {
       if (el.kind[i] != ElementKind::Grain) continue;
       const double R = el.radius[i];
-      const double k = pi * R * youngs_;
+      const double k = wall_contact_stiffness(youngs_, R);
       const Vec3 d = el.x[i] - centre_;
       const double r = d.norm();
       // Outward unit vector (any direction at the centre itself, where only the inner wall acts).
@@ -72,7 +73,7 @@ void SphericalWallContact::add_stiffness(const Elements& el, const NeighborList*
     const double R = el.radius[i];
     const double r = (el.x[i] - centre_).norm();
     // Fixed walls: k/2 per wall within a diameter of touching (see PlanarWallContact).
-    const double k = std::numbers::pi * R * youngs_;
+    const double k = wall_contact_stiffness(youngs_, R);
     if (r_outer_ - (r + R) < 2.0 * R) s.kt[i] += 0.5 * k;
     if (r_inner_ > 0 && (r - R) - r_inner_ < 2.0 * R) s.kt[i] += 0.5 * k;
   }

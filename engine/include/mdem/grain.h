@@ -1,6 +1,8 @@
 #pragma once
 // Grains of a nanocrystalline particle (model.md §2, §6): rigid spheres, mass ρ·(4/3)πR³,
 // inertia 2/5·m·R²; and the rigid flat platens (ElementKind::Wall) that load them.
+#include <vector>
+
 #include "mdem/elements.h"
 
 namespace mdem {
@@ -33,5 +35,33 @@ ElementInit platen_element(const Vec3& point, const Vec3& normal, double mass, d
 // index.
 std::size_t add_platen(Elements& el, const Vec3& point, const Vec3& normal, double mass,
                        double radius);
+
+// Eq. 36's normal stiffness k_n = π·R_l²·E*/L_l between two grains of one material
+// (1/E* = 1/E + 1/E, so E* = E/2): with R_l = min(R1, R2) and L_l = R1 + R2 for a contact, or the
+// neck radius of a broken bond for its post-break contact (section_radius).
+double grain_contact_stiffness(double youngs, double ri, double rj);
+double grain_contact_stiffness(double youngs, double ri, double rj, double section_radius);
+// A grain of radius R against a rigid wall, flat or spherical: the rigid limit of Eq. 36's neck,
+// k_n = π·R²·E/R = π·R·E (planar_wall.h).
+double wall_contact_stiffness(double youngs, double radius);
+
+// The platens (ElementKind::Wall elements) of a system and their planes: the indices are found
+// once (again when the element count changes), the planes refreshed by update() without
+// allocating, so a force model may call it every evaluation.
+class PlatenPlanes {
+ public:
+  void update(const Elements& el);
+  std::size_t size() const { return index_.size(); }
+  std::size_t index(std::size_t w) const { return index_[w]; }
+  const Vec3& point(std::size_t w) const { return point_[w]; }
+  const Vec3& normal(std::size_t w) const { return normal_[w]; }  // towards the material
+  // Distance of x from platen w's plane along its normal (negative behind it).
+  double height(std::size_t w, const Vec3& x) const { return normal_[w].dot(x - point_[w]); }
+
+ private:
+  std::vector<std::size_t> index_;
+  std::vector<Vec3> point_, normal_;
+  std::size_t scanned_ = static_cast<std::size_t>(-1);
+};
 
 }  // namespace mdem

@@ -114,6 +114,7 @@ class GrainDashpots final : public ForceModel {
   double ratio_;
   const GrainBond* bonds_;
   double contact_youngs_, max_radius_;
+  mutable PlatenPlanes platens_;  // refreshed at every evaluation
 };
 
 }  // namespace mdem

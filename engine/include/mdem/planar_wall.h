@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "mdem/force_model.h"
+#include "mdem/grain.h"
 
 namespace mdem {
 
@@ -22,13 +23,8 @@ class PlanarWallContact final : public ForceModel {
   double stiffness(double radius) const;
 
  private:
-  void find_walls(const Elements& el) const;
-
   double youngs_;
-  // Platen indices, found at first use (elements are not added after a system starts; a changed
-  // element count triggers a new scan).
-  mutable std::vector<std::size_t> walls_;
-  mutable std::size_t scanned_ = static_cast<std::size_t>(-1);
+  mutable PlatenPlanes platens_;  // refreshed at every evaluation
 };
 
 }  // namespace mdem
