@@ -10,8 +10,10 @@
 //
 // Each case prints a table and writes its curves as CSV into --out (default .). Options:
 //   --threads N --speed V (nm/ps per platen) --quick (smaller particles, for a smoke run)
-//   hertz: --radius R --grains MIN,MAX --porosity P --realisations N --cube-half A
-//          --strain S (peak approach over R) --seed K
+//   hertz: --radius R --grains MIN,MAX --porosity P --realisations N --strain S (peak approach
+//          over R) --seed K; the cube: --cube-half A (default R) --cube-speed V --cube-only;
+//          other surfaces: --carve (cut out of a bulk packing) [--press P (cut P·r_max wider,
+//          then pressed into a spherical wall at R before bonding)]
 //   au: --sigmas LIST --peak H;  cds: --peaks LIST --grains MIN,MAX
 #include <omp.h>
 
@@ -31,6 +33,8 @@
 #include <vector>
 
 #include "mdem/compression_job.h"
+#include "mdem/linear_contact.h"
+#include "mdem/spherical_wall.h"
 #include "mdem/units.h"
 
 namespace {
@@ -45,9 +49,12 @@ struct Options {
   double speed = 0.02;  // nm/ps per platen
   bool quick = false, cube_only = false;
   bool carve = false;  // hertz: spheres carved out of a bulk cube packing, not packed in a sphere
+  double press = 0;    // hertz --carve: carve this many r_max wider, then press to R (0: no press)
   fs::path out = ".";
   // hertz
-  double radius = 50, gmin = 1, gmax = 2, porosity = 0.4, cube_half = 12, strain = 0.1;
+  double radius = 50, gmin = 1, gmax = 2, porosity = 0.4, strain = 0.1;
+  double cube_half = 0;        // 0: the sphere's radius (the same surface-to-volume ratio, 3/R)
+  double cube_speed = 0.0004;  // nm/ps per platen: quasi-static (see docs/compression.md)
   int realisations = 10;
   unsigned seed = 1;
   // au / cds
@@ -59,12 +66,13 @@ struct Options {
 
 [[noreturn]] void usage(const std::string& msg) {
   std::fprintf(stderr, "validate_compression: %s\n", msg.c_str());
-  std::fprintf(stderr,
-               "usage: validate_compression hertz|au|cds [--threads N] [--speed V] [--quick] "
-               "[--out DIR]\n  hertz: [--radius R] [--grains MIN,MAX] [--porosity P] "
-               "[--realisations N] [--cube-half A] [--cube-only] [--carve] [--strain S] [--seed "
-               "K]\n  au: [--sigmas "
-               "LIST] [--peak H]   cds: [--peaks LIST] [--grains MIN,MAX]\n");
+  std::fprintf(
+      stderr,
+      "usage: validate_compression hertz|au|cds [--threads N] [--speed V] [--quick] "
+      "[--out DIR]\n  hertz: [--radius R] [--grains MIN,MAX] [--porosity P] "
+      "[--realisations N] [--cube-half A] [--cube-speed V] [--cube-only] [--carve [--press "
+      "P]] [--strain S] [--seed K]\n  au: [--sigmas "
+      "LIST] [--peak H]   cds: [--peaks LIST] [--grains MIN,MAX]\n");
   std::exit(2);
 }
 
@@ -107,6 +115,8 @@ Options parse(int argc, char** argv) {
       o.cube_only = true;
     else if (a == "--carve")
       o.carve = true;
+    else if (a == "--press")
+      o.press = number(a, val());
     else if (a == "--out")
       o.out = val();
     else if (a == "--radius")
@@ -123,6 +133,8 @@ Options parse(int argc, char** argv) {
       o.realisations = static_cast<int>(number(a, val()));
     else if (a == "--cube-half")
       o.cube_half = number(a, val());
+    else if (a == "--cube-speed")
+      o.cube_speed = number(a, val());
     else if (a == "--strain")
       o.strain = number(a, val());
     else if (a == "--seed")
@@ -154,8 +166,8 @@ struct RunResult {
   double pack_s = 0, run_s = 0;
   long grains = 0, bonds = 0, steps = 0;
   double porosity = 0, dt = 0;
-  std::vector<Vec3> x0, x_half, x_peak;  // grain positions: start, half the peak, the peak
-  double f_half = 0, h_half = 0;         // force and displacement at x_half
+  double wall_shift = 0;  // how far the packing walls closed in (nm): the body is that much smaller
+  std::vector<Vec3> x0;   // grain positions at the start (bonded, force-free)
 };
 
 IntegratorSettings settings(const Options& o) {
@@ -166,31 +178,20 @@ IntegratorSettings settings(const Options& o) {
 }
 
 // Builds the job (packing included), runs it, records the curve every `every_ps`.
-RunResult run(CompressionJob& job, double every_ps, const Options& o, bool keep_peak,
-              double peak = 0) {
+RunResult run(CompressionJob& job, double every_ps) {
   RunResult r;
   System& sys = job.system();
   sys.initialize();
   r.grains = static_cast<long>(job.packing().grains.size());
   r.bonds = static_cast<long>(job.bonds().bonds().size());
   r.porosity = job.packing().porosity;
+  r.wall_shift = job.packing().wall_shift;
   r.dt = sys.dt();
   for (std::size_t i = 0; i < job.packing().grains.size(); ++i) r.x0.push_back(sys.elements().x[i]);
   JobObserver obs;
-  double h_max = -1;
   obs.frame = [&](const SeriesFrame& f) {
-    const double h = job.displacement();
-    r.curve.push_back({f.time_ps, h, job.platen_force_nN(), (long)job.bonds().broken_count(),
-                       (long)job.bonds().yielded_count()});
-    if (keep_peak && r.x_half.empty() && h >= 0.5 * peak) {
-      r.x_half.assign(sys.elements().x.begin(), sys.elements().x.begin() + r.grains);
-      r.f_half = job.platen_force_nN();
-      r.h_half = h;
-    }
-    if (keep_peak && h > h_max) {
-      h_max = h;
-      r.x_peak.assign(sys.elements().x.begin(), sys.elements().x.begin() + r.grains);
-    }
+    r.curve.push_back({f.time_ps, job.displacement(), job.platen_force_nN(),
+                       (long)job.bonds().broken_count(), (long)job.bonds().yielded_count()});
   };
   const auto t0 = Clock::now();
   JobCadence c;
@@ -198,7 +199,6 @@ RunResult run(CompressionJob& job, double every_ps, const Options& o, bool keep_
   const JobRunResult res = run_job(job, c, obs);
   r.run_s = seconds_since(t0);
   r.steps = res.steps;
-  (void)o;
   return r;
 }
 
@@ -271,6 +271,83 @@ PackedParticle carve_sphere(const PackedParticle& cube, double R) {
       ++degree[index[j]];
     }
   out.rattlers = std::count(degree.begin(), degree.end(), 0);
+  out.wall_shift = 0;  // the cut is at R itself
+  return out;
+}
+
+// A carved sphere pressed into a spherical wall of radius R before it is bonded: the grains that
+// stick out are pushed in and the surface settles smooth at the wall, while the grains beneath
+// keep the bulk packing's arrangement. Relaxes with local damping 0.7 until the mean unbalanced
+// force is 1e-3 of the mean contact force; the touching pairs are found afresh.
+PackedParticle press_into_sphere(PackedParticle p, double R, const GrainMaterial& m, double r_max,
+                                 int threads) {
+  const std::size_t n = p.grains.size();
+  double start = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    start = std::max(start, p.grains.x[i].norm() + p.grains.radius[i]);
+  IntegratorSettings cfg;
+  cfg.local_damping = 0.7;
+  cfg.threads = threads;
+  cfg.skin = std::max(0.2, 0.3 * r_max);
+  cfg.guard_energy_tolerance = 1e100;  // the moving wall puts in energy no load accounts for
+  System sys(std::move(p.grains), cfg);
+  auto* contact = sys.add(std::make_unique<LinearContact>(m.youngs, r_max));
+  auto* wall = sys.add(std::make_unique<SphericalWallContact>(Vec3::Zero(), start, 0.0, m.youngs));
+  sys.initialize();
+  const double rate = 2e-4 * r_max;  // nm per step, as the packing's walls
+  for (double w = start; w > R;) {
+    w = std::max(R, w - 10 * rate);
+    wall->set_radii(w, 0.0);
+    sys.refresh();
+    sys.run(10);
+  }
+  for (long steps = 0;; steps += 100) {
+    const Elements& el = sys.elements();
+    const NeighborList* nl = sys.neighbors();
+    double fsum = 0, unbalanced = 0;
+    long contacts = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      unbalanced += el.f[i].norm();
+      for (std::uint32_t k = nl->offsets()[i]; k < nl->offsets()[i + 1]; ++k) {
+        const std::uint32_t j = nl->neighbors()[k];
+        const double fc = contact->force(el.radius[i], el.radius[j], (el.x[j] - el.x[i]).norm());
+        if (fc > 0) {
+          fsum += fc;
+          ++contacts;
+        }
+      }
+    }
+    const double ratio = contacts ? (unbalanced / n) / (fsum / contacts) : 0.0;
+    if (steps > 200000)
+      throw std::runtime_error("press_into_sphere: no equilibrium in 200000 steps (ratio " +
+                               std::to_string(ratio) + ")");
+    if (ratio < 1e-3) {
+      std::printf("  pressed from %.2f to %.2f nm, relaxed in %ld steps (ratio %.2g)\n", start, R,
+                  steps, ratio);
+      break;
+    }
+    sys.run(100);
+  }
+  PackedParticle out = p;
+  out.grains = Elements();
+  out.touching.clear();
+  const Elements& fin = sys.elements();
+  const NeighborList* nl = sys.neighbors();  // current: it holds every touching pair
+  std::vector<int> degree(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    out.grains.add(grain_element(fin.x[i], fin.radius[i], m));
+    for (std::uint32_t k = nl->offsets()[i]; k < nl->offsets()[i + 1]; ++k) {
+      const std::uint32_t j = nl->neighbors()[k];
+      const double reach = fin.radius[i] + fin.radius[j];
+      if ((fin.x[j] - fin.x[i]).squaredNorm() < reach * reach) {
+        out.touching.emplace_back(i, j);  // a half list: i < j
+        ++degree[i];
+        ++degree[j];
+      }
+    }
+  }
+  std::sort(out.touching.begin(), out.touching.end());
+  out.rattlers = std::count(degree.begin(), degree.end(), 0);
   return out;
 }
 
@@ -279,18 +356,23 @@ PackedParticle carve_sphere(const PackedParticle& cube, double R) {
 int hertz(const Options& o) {
   const GrainMaterial au = gold();
   const double E_bond_GPa = units::to_GPa(au.youngs);
-  // 1. The bonded cube: E_eff from the stress-strain slope, ν_eff from the lateral strain.
+  // 1. The bonded cube: E_eff from the stress-strain slope, ν_eff from the lateral strain. Its
+  // edge is by default the sphere's diameter: the same surface-to-volume ratio (3/R), so the same
+  // share of grains in the looser layers the packing walls leave at the surface.
+  const double cube_half = o.cube_half > 0 ? o.cube_half : o.radius;
   CompressionJobSpec cs =
-      base_spec(PackingShape::Cube, o.cube_half, 0, o.gmin, o.gmax, o.porosity, au, o.seed, o);
-  cs.loading.peak_displacement = 0.01 * 2 * o.cube_half;  // 1 % strain
+      base_spec(PackingShape::Cube, cube_half, 0, o.gmin, o.gmax, o.porosity, au, o.seed, o);
+  cs.loading.peak_displacement = 0.01 * 2 * cube_half;  // 1 % strain
   cs.loading.unload = false;
-  cs.loading.speed = o.speed / 5;  // a smaller body, as slow in units of its crossing time
+  // Quasi-static: at the default 0.0004 nm/ps a 30 nm cube reaches 1 % strain in ~20 crossing
+  // times of a sound wave; 2x slower changes E_eff by < 0.1 %, 5x faster lowers it by 4 %.
+  cs.loading.speed = o.cube_speed;
   auto t0 = Clock::now();
   CompressionJob cube(cs, settings(o));
   const double cube_pack_s = seconds_since(t0);
-  RunResult rc = run(cube, cs.loading.peak_displacement / (2 * cs.loading.speed) / 100, o, true,
-                     cs.loading.peak_displacement);
-  const double edge = 2 * o.cube_half, area = edge * edge;
+  RunResult rc = run(cube, cs.loading.peak_displacement / (2 * cs.loading.speed) / 100);
+  // The body is the container less the walls' closing-in: its edge, and the loaded area.
+  const double edge = 2 * (cube_half - rc.wall_shift), area = edge * edge;
   std::vector<double> eps, sig;
   for (const auto& p : rc.curve)
     if (p.h >= 0.5 * cs.loading.peak_displacement) {  // past the seating of the platens
@@ -298,39 +380,48 @@ int hertz(const Options& o) {
       sig.push_back(units::to_GPa(units::nN(p.f)) / area);  // nN/nm² in GPa
     }
   const double E_platen_GPa = fit_line(eps, sig).first;
-  // The strain inside the cube, free of the platens' seating: slopes of the displacement from
-  // half the peak to the peak against the position, in z (axial) and in x, y (lateral).
-  std::vector<double> X, dX, Y, dY, Z, dZ;
-  // Interior grains only (within 60 % of the half-edge of the centre in every direction): the
-  // layers the packing walls ordered at the faces are looser and would soften the average.
+  // 2. The same cube held at the peak until it is static: the strain inside it, from the
+  // interior grains' displacements since the (force-free) bonded start, checks E_eff free of the
+  // platens' seating and of any lag of the interior behind the platens, and gives ν_eff.
+  System& sys = cube.system();
+  const auto t_hold = Clock::now();
+  long held = 0;
+  for (double f_prev = cube.platen_force_nN();; f_prev = cube.platen_force_nN()) {
+    sys.run(500);
+    held += 500;
+    if (std::abs(cube.platen_force_nN() - f_prev) < 1e-5 * std::abs(f_prev) || held >= 400000)
+      break;
+  }
+  const double hold_s = seconds_since(t_hold);
+  const double f_static = cube.platen_force_nN();
+  // Interior grains only (within 60 % of the half-edge of the centre in every direction), clear
+  // of the looser layers the packing walls leave at the faces.
   Vec3 centre = Vec3::Zero();
   for (const Vec3& x : rc.x0) centre += x;
   centre /= static_cast<double>(rc.x0.size());
+  std::vector<double> pos[3], disp[3];
   for (std::size_t i = 0; i < rc.x0.size(); ++i) {
-    if ((rc.x0[i] - centre).cwiseAbs().maxCoeff() > 0.6 * o.cube_half) continue;
-    X.push_back(rc.x0[i].x());
-    dX.push_back(rc.x_peak[i].x() - rc.x_half[i].x());
-    Y.push_back(rc.x0[i].y());
-    dY.push_back(rc.x_peak[i].y() - rc.x_half[i].y());
-    Z.push_back(rc.x0[i].z());
-    dZ.push_back(rc.x_peak[i].z() - rc.x_half[i].z());
+    if ((rc.x0[i] - centre).cwiseAbs().maxCoeff() > 0.6 * cube_half) continue;
+    for (int a = 0; a < 3; ++a) {
+      pos[a].push_back(rc.x0[i][a]);
+      disp[a].push_back(sys.elements().x[i][a] - rc.x0[i][a]);
+    }
   }
-  const double d_eps_z = -fit_line(Z, dZ).first;  // compression positive
-  const double d_eps_lat = 0.5 * (fit_line(X, dX).first + fit_line(Y, dY).first);
-  const double d_sigma = units::to_GPa(units::nN(rc.curve.back().f - rc.f_half)) / area;  // GPa
-  // The platens' figure is the modulus used below: the internal one rests on displacements of
-  // a few grains' thermal-like jitter and scatters by ±15 % between packings.
-  const double E_internal_GPa = d_sigma / d_eps_z;
+  const double eps_z = -fit_line(pos[2], disp[2]).first;  // compression positive
+  const double eps_lat = 0.5 * (fit_line(pos[0], disp[0]).first + fit_line(pos[1], disp[1]).first);
+  const double E_interior_GPa = units::to_GPa(units::nN(f_static)) / area / eps_z;
   const double E_eff_GPa = E_platen_GPa;
-  const double nu_eff = d_eps_lat / d_eps_z;
+  const double nu_eff = eps_lat / eps_z;
   std::printf(
-      "bonded cube: edge %.1f nm, %ld grains, %ld bonds, porosity %.3f, packed in %.1f s, "
-      "loaded in %.1f s (%ld steps, dt %.3f ps)\n",
-      edge, rc.grains, rc.bonds, rc.porosity, cube_pack_s, rc.run_s, rc.steps, rc.dt);
+      "bonded cube: edge %.2f nm (walls closed in %.2f nm), %ld grains, %ld bonds, porosity "
+      "%.3f, packed in %.1f s, loaded in %.1f s (%ld steps, dt %.3f ps), held %ld steps "
+      "(%.1f s)\n",
+      edge, rc.wall_shift, rc.grains, rc.bonds, rc.porosity, cube_pack_s, rc.run_s, rc.steps, rc.dt,
+      held, hold_s);
   std::printf(
-      "  E_eff = %.2f GPa from the platen displacement (%.2f GPa from the interior "
-      "strain; bond material E = %.0f GPa), nu_eff = %.3f\n",
-      E_eff_GPa, E_internal_GPa, E_bond_GPa, nu_eff);
+      "  E_eff = %.2f GPa from the platens' stress-strain slope; %.2f GPa from the static "
+      "interior strain %.5f (platens' %.5f); bond material E = %.0f GPa; nu_eff = %.3f\n",
+      E_eff_GPa, E_interior_GPa, eps_z, cs.loading.peak_displacement / edge, E_bond_GPa, nu_eff);
   write_curve(o.out / "hertz-cube.csv", rc.curve);
   if (o.cube_only) return 0;
 
@@ -342,8 +433,8 @@ int hertz(const Options& o) {
       "\nsphere R = %.1f nm, grains %.2g-%.2g nm, target porosity %.2f; fit on h/R in "
       "[%.3f, %.3f]\n",
       o.radius, o.gmin, o.gmax, o.porosity, lo, hi);
-  std::printf("%4s %7s %7s %9s %8s %8s %9s %9s\n", "seed", "grains", "poros", "exponent",
-              "C(n=1.5)", "C/rigid", "pack [s]", "run [s]");
+  std::printf("%4s %7s %7s %7s %9s %8s %8s %9s %9s\n", "seed", "grains", "poros", "R [nm]",
+              "exponent", "C(n=1.5)", "C/rigid", "pack [s]", "run [s]");
   std::vector<double> exps, Cs;
   for (int k = 0; k < o.realisations; ++k) {
     CompressionJobSpec ss = base_spec(PackingShape::Shell, o.radius, 0, o.gmin, o.gmax, o.porosity,
@@ -356,19 +447,23 @@ int hertz(const Options& o) {
       PackingSpec bulk = ss.particle;
       bulk.shape = PackingShape::Cube;
       bulk.r_outer = o.radius + 2 * o.gmax;  // the carved sphere stays clear of the cube's faces
-      made = std::make_unique<CompressionJob>(carve_sphere(pack_grains(bulk), o.radius), ss,
-                                              settings(o));
+      PackedParticle carved = carve_sphere(pack_grains(bulk), o.radius + o.press * o.gmax);
+      if (o.press > 0)
+        carved = press_into_sphere(std::move(carved), o.radius, au, o.gmax, o.threads);
+      made = std::make_unique<CompressionJob>(carved, ss, settings(o));
     } else {
       made = std::make_unique<CompressionJob>(ss, settings(o));
     }
     CompressionJob& sphere = *made;
     const double pack_s = seconds_since(t0);
-    RunResult r = run(sphere, ss.loading.peak_displacement / (2 * o.speed) / 200, o, false);
+    RunResult r = run(sphere, ss.loading.peak_displacement / (2 * o.speed) / 200);
+    // The sphere's radius is the container's less the walls' closing-in.
+    const double R = o.radius - r.wall_shift;
     std::vector<double> lx, ly, c;
     for (const auto& p : r.curve) {
-      const double hr = p.h / o.radius;
+      const double hr = p.h / R;
       if (hr < lo || hr > hi || p.f <= 0) continue;
-      const double fn = units::to_GPa(units::nN(p.f)) / (o.radius * o.radius * E_eff_GPa);
+      const double fn = units::to_GPa(units::nN(p.f)) / (R * R * E_eff_GPa);
       lx.push_back(std::log(hr));
       ly.push_back(std::log(fn));
       c.push_back(fn / std::pow(hr, 1.5));
@@ -377,8 +472,8 @@ int hertz(const Options& o) {
     const double C = std::accumulate(c.begin(), c.end(), 0.0) / c.size();
     exps.push_back(n);
     Cs.push_back(C);
-    std::printf("%4lu %7ld %7.3f %9.3f %8.4f %8.3f %9.1f %9.1f\n",
-                static_cast<unsigned long>(ss.particle.seed), r.grains, r.porosity, n, C,
+    std::printf("%4lu %7ld %7.3f %7.2f %9.3f %8.4f %8.3f %9.1f %9.1f\n",
+                static_cast<unsigned long>(ss.particle.seed), r.grains, r.porosity, R, n, C,
                 C / C_rigid, pack_s, r.run_s);
     write_curve(o.out / ("hertz-sphere-" + std::to_string(k) + ".csv"), r.curve);
   }
@@ -490,7 +585,7 @@ int shells(const Options& o) {
     const auto t0 = Clock::now();
     CompressionJob job(s, settings(o));
     const double pack_s = seconds_since(t0);
-    RunResult r = run(job, s.loading.peak_displacement / (2 * o.speed) / 200, o, false);
+    RunResult r = run(job, s.loading.peak_displacement / (2 * o.speed) / 200);
     const ShellOutcome oc = outcome(r, s.loading.peak_displacement);
     std::printf("%8.3g %7ld %7ld %7.3f %10.4f %8.2f %9.2f %9.2f %8.2f %8ld %8ld %9ld %8.1f %8.1f\n",
                 c, r.grains, r.bonds, r.porosity, oc.peak_f / 1000, oc.h_at_peak, oc.k_load,
