@@ -1,12 +1,12 @@
 // Grain–platen contact: linear, frictionless, rigid-platen limit of Eq. 36 (planar_wall.h).
 #include "mdem/planar_wall.h"
 
-#include <omp.h>
-
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 #include <string>
+
+#include "per_grain.h"
 
 namespace mdem {
 
@@ -23,31 +23,21 @@ double PlanarWallContact::stiffness(double radius) const {
 void PlanarWallContact::compute(const Elements& el, const NeighborList*, ForceSink& sink) const {
   platens_.update(el);
   if (platens_.size() == 0) return;
-  const long n = static_cast<long>(el.size());
   const std::size_t nw = platens_.size();
-#pragma omp parallel num_threads(sink.threads()) if (n >= kParallelMinItems)
-  {
-    const int tid = omp_get_thread_num();
-    Vec3* f = sink.force(tid);
-    double energy = 0;
-#pragma omp for schedule(static)
-    for (long i = 0; i < n; ++i) {
-      if (el.kind[i] != ElementKind::Grain) continue;
-      const double R = el.radius[i];
-      for (std::size_t w = 0; w < nw; ++w) {
-        const double u = R - platens_.height(w, el.x[i]);
-        if (u <= 0) continue;
-        const double k = stiffness(R);
-        const Vec3 F = (k * u) * platens_.normal(w);
-        f[i] += F;
-        // The reaction on the platen: a force only (its rotation is never free), so the system
-        // books the work of its prescribed motion and a protocol reads the platen force.
-        f[platens_.index(w)] -= F;
-        energy += 0.5 * k * u * u;
-      }
+  for_each_grain(el, sink, EnergyTerm::Contact, [&](long i, Vec3* f, double& energy) {
+    const double R = el.radius[i];
+    for (std::size_t w = 0; w < nw; ++w) {
+      const double u = R - platens_.height(w, el.x[i]);
+      if (u <= 0) continue;
+      const double k = stiffness(R);
+      const Vec3 F = (k * u) * platens_.normal(w);
+      f[i] += F;
+      // The reaction on the platen: a force only (its rotation is never free), so the system
+      // books the work of its prescribed motion and a protocol reads the platen force.
+      f[platens_.index(w)] -= F;
+      energy += 0.5 * k * u * u;
     }
-    sink.energy(tid).add(EnergyTerm::Contact, energy);
-  }
+  });
 }
 
 void PlanarWallContact::add_stiffness(const Elements& el, const NeighborList*,

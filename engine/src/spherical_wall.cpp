@@ -1,14 +1,13 @@
 // Fixed spherical packing walls (spherical_wall.h).
 #include "mdem/spherical_wall.h"
 
-#include <omp.h>
-
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 #include <string>
 
 #include "mdem/grain.h"
+#include "per_grain.h"
 
 namespace mdem {
 
@@ -34,36 +33,24 @@ void SphericalWallContact::set_radii(double r_outer, double r_inner) {
 }
 
 void SphericalWallContact::compute(const Elements& el, const NeighborList*, ForceSink& sink) const {
-  const long n = static_cast<long>(el.size());
-#pragma omp parallel num_threads(sink.threads()) if (n >= kParallelMinItems)
-  {
-    const int tid = omp_get_thread_num();
-    Vec3* f = sink.force(tid);
-    double energy = 0;
-#pragma omp for schedule(static)
-    for (long i = 0; i < n; ++i) {
-      if (el.kind[i] != ElementKind::Grain) continue;
-      const double R = el.radius[i];
-      const double k = wall_contact_stiffness(youngs_, R);
-      const Vec3 d = el.x[i] - centre_;
-      const double r = d.norm();
-      // Outward unit vector (any direction at the centre itself, where only the inner wall acts).
-      const Vec3 out = r > 0 ? Vec3(d / r) : Vec3(Vec3::UnitZ());
-      const double u_out = r + R - r_outer_;
-      if (u_out > 0) {
-        f[i] -= (k * u_out) * out;
-        energy += 0.5 * k * u_out * u_out;
-      }
-      if (r_inner_ > 0) {
-        const double u_in = r_inner_ - (r - R);
-        if (u_in > 0) {
-          f[i] += (k * u_in) * out;
-          energy += 0.5 * k * u_in * u_in;
-        }
-      }
+  for_each_grain(el, sink, EnergyTerm::Contact, [&](long i, Vec3* f, double& energy) {
+    const double R = el.radius[i];
+    const double k = wall_contact_stiffness(youngs_, R);
+    const Vec3 d = el.x[i] - centre_;
+    const double r = d.norm();
+    // Outward unit vector (any direction at the centre itself, where only the inner wall acts).
+    const Vec3 out = r > 0 ? Vec3(d / r) : Vec3(Vec3::UnitZ());
+    const double u_out = r + R - r_outer_;
+    if (u_out > 0) {
+      f[i] -= (k * u_out) * out;
+      energy += 0.5 * k * u_out * u_out;
     }
-    sink.energy(tid).add(EnergyTerm::Contact, energy);
-  }
+    const double u_in = r_inner_ - (r - R);
+    if (r_inner_ > 0 && u_in > 0) {
+      f[i] += (k * u_in) * out;
+      energy += 0.5 * k * u_in * u_in;
+    }
+  });
 }
 
 void SphericalWallContact::add_stiffness(const Elements& el, const NeighborList*,
