@@ -446,17 +446,11 @@ void GrainDashpots::add_stiffness(const Elements& el, const NeighborList* pairs,
       }
     }
   }
+  // The platen moves as prescribed, so only the grain's row sees the dashpot.
   platens_.update(el);
-  for (std::size_t w = 0; w < platens_.size(); ++w) {
-    for (std::size_t i = 0; i < el.size(); ++i) {
-      if (el.kind[i] != ElementKind::Grain) continue;
-      const double R = el.radius[i];
-      // The grains within a diameter of touching it (as PlanarWallContact counts them); the
-      // platen moves as prescribed, so only the grain's row sees the dashpot.
-      if (platens_.height(w, el.x[i]) >= 3.0 * R) continue;
-      s.c[i] += beta2 * std::sqrt(el.mass[i] * wall_contact_stiffness(contact_youngs_, R));
-    }
-  }
+  platens_.for_each_grain_near(el, [&](std::size_t i) {
+    s.c[i] += beta2 * std::sqrt(el.mass[i] * wall_contact_stiffness(contact_youngs_, el.radius[i]));
+  });
 }
 
 }  // namespace mdem

@@ -43,18 +43,10 @@ void PlanarWallContact::compute(const Elements& el, const NeighborList*, ForceSi
 void PlanarWallContact::add_stiffness(const Elements& el, const NeighborList*,
                                       StiffnessSums& s) const {
   platens_.update(el);
-  for (std::size_t w = 0; w < platens_.size(); ++w) {
-    for (std::size_t i = 0; i < el.size(); ++i) {
-      if (el.kind[i] != ElementKind::Grain) continue;
-      const double R = el.radius[i];
-      // Grains within a diameter of touching the platen: those it meets first as it advances (the
-      // ones behind are shielded by them).
-      if (platens_.height(w, el.x[i]) >= 3.0 * R) continue;
-      // A platen moves as prescribed: its spring adds k/m to the grain's ω² with no coupling
-      // block, and the system doubles kt for the coupling of free pairs, hence k/2.
-      s.kt[i] += 0.5 * stiffness(R);
-    }
-  }
+  // A platen moves as prescribed: its spring adds k/m to the grain's ω² with no coupling block,
+  // and the system doubles kt for the coupling of free pairs, hence k/2.
+  platens_.for_each_grain_near(el,
+                               [&](std::size_t i) { s.kt[i] += 0.5 * stiffness(el.radius[i]); });
 }
 
 }  // namespace mdem

@@ -57,6 +57,15 @@ class PlatenPlanes {
   const Vec3& normal(std::size_t w) const { return normal_[w]; }  // towards the material
   // Distance of x from platen w's plane along its normal (negative behind it).
   double height(std::size_t w, const Vec3& x) const { return normal_[w].dot(x - point_[w]); }
+  // Calls fn(i), once per platen, for every grain within a diameter of touching it: the grains it
+  // meets first as it advances (those behind are shielded by them); the time-step bounds count
+  // these.
+  template <class Fn>
+  void for_each_grain_near(const Elements& el, Fn&& fn) const {
+    for (std::size_t w = 0; w < size(); ++w)
+      for (std::size_t i = 0; i < el.size(); ++i)
+        if (el.kind[i] == ElementKind::Grain && height(w, el.x[i]) < 3.0 * el.radius[i]) fn(i);
+  }
 
  private:
   std::vector<std::size_t> index_;
