@@ -9,13 +9,13 @@
 #include <cstdio>
 #include <memory>
 
-#include "mdem/anisotropic_vdw.h"
-#include "mdem/film_builder.h"
-#include "mdem/neighbor_list.h"
-#include "mdem/parallel_bond.h"
-#include "mdem/system.h"
-#include "mdem/twist_job.h"
-#include "mdem/units.h"
+#include "mdem/core/units.h"
+#include "mdem/force/bond/parallel_bond.h"
+#include "mdem/force/contact/anisotropic_vdw.h"
+#include "mdem/integrate/system.h"
+#include "mdem/job/twist_job.h"
+#include "mdem/neighbor/neighbor_list.h"
+#include "mdem/scene/film_builder.h"
 
 using namespace mdem;
 

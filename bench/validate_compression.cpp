@@ -32,10 +32,10 @@
 #include <string>
 #include <vector>
 
-#include "mdem/compression_job.h"
-#include "mdem/linear_contact.h"
-#include "mdem/spherical_wall.h"
-#include "mdem/units.h"
+#include "mdem/core/units.h"
+#include "mdem/force/contact/linear_contact.h"
+#include "mdem/force/wall/spherical_wall.h"
+#include "mdem/job/compression_job.h"
 
 namespace {
 

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "mdem/cli.h"
-#include "mdem/system.h"
+#include "mdem/integrate/system.h"
 
 namespace mdem::testing {
 

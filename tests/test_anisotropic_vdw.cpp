@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "mdem/anisotropic_vdw.h"
-#include "mdem/neighbor_list.h"
+#include "mdem/force/contact/anisotropic_vdw.h"
+#include "mdem/neighbor/neighbor_list.h"
 
 using namespace mdem;
 

@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "mdem/state_io.h"
-#include "mdem/twist_job.h"
-#include "mdem/units.h"
+#include "mdem/core/units.h"
+#include "mdem/io/state_io.h"
+#include "mdem/job/twist_job.h"
 
 namespace mdem {
 namespace {

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "mdem/cli.h"
-#include "mdem/cnt.h"
+#include "mdem/core/cnt.h"
 
 namespace {
 

@@ -4,10 +4,10 @@
 
 #include <cmath>
 
-#include "mdem/cnt.h"
-#include "mdem/parallel_bond.h"
-#include "mdem/system.h"
-#include "mdem/tube_builder.h"
+#include "mdem/core/cnt.h"
+#include "mdem/force/bond/parallel_bond.h"
+#include "mdem/integrate/system.h"
+#include "mdem/scene/tube_builder.h"
 #include "support.h"
 
 using namespace mdem;

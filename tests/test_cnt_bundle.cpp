@@ -5,13 +5,13 @@
 #include <cmath>
 #include <cstdio>
 
-#include "mdem/anisotropic_vdw.h"
-#include "mdem/bundle_scene.h"
-#include "mdem/cnt.h"
-#include "mdem/film_builder.h"
-#include "mdem/parallel_bond.h"
-#include "mdem/system.h"
-#include "mdem/tube_builder.h"
+#include "mdem/core/cnt.h"
+#include "mdem/force/bond/parallel_bond.h"
+#include "mdem/force/contact/anisotropic_vdw.h"
+#include "mdem/integrate/system.h"
+#include "mdem/scene/bundle_scene.h"
+#include "mdem/scene/film_builder.h"
+#include "mdem/scene/tube_builder.h"
 #include "support.h"
 
 using namespace mdem;

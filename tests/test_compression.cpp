@@ -10,10 +10,10 @@
 #include <numbers>
 #include <string>
 
-#include "mdem/compression_job.h"
-#include "mdem/grain_packing.h"
-#include "mdem/state_io.h"
-#include "mdem/units.h"
+#include "mdem/core/units.h"
+#include "mdem/io/state_io.h"
+#include "mdem/job/compression_job.h"
+#include "mdem/scene/grain_packing.h"
 
 namespace mdem {
 namespace {

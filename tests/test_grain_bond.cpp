@@ -17,11 +17,11 @@
 #include <string>
 #include <vector>
 
-#include "mdem/grain.h"
-#include "mdem/grain_bond.h"
-#include "mdem/state_io.h"
-#include "mdem/system.h"
-#include "mdem/units.h"
+#include "mdem/core/units.h"
+#include "mdem/force/bond/grain_bond.h"
+#include "mdem/integrate/system.h"
+#include "mdem/io/state_io.h"
+#include "mdem/scene/grain.h"
 #include "support.h"
 
 namespace mdem {

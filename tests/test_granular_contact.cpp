@@ -7,12 +7,12 @@
 #include <cmath>
 #include <numbers>
 
-#include "mdem/grain.h"
-#include "mdem/linear_contact.h"
-#include "mdem/planar_wall.h"
-#include "mdem/spherical_wall.h"
-#include "mdem/system.h"
-#include "mdem/units.h"
+#include "mdem/core/units.h"
+#include "mdem/force/contact/linear_contact.h"
+#include "mdem/force/wall/planar_wall.h"
+#include "mdem/force/wall/spherical_wall.h"
+#include "mdem/integrate/system.h"
+#include "mdem/scene/grain.h"
 
 namespace mdem {
 namespace {

@@ -6,10 +6,10 @@
 #include <numbers>
 #include <random>
 
-#include "mdem/cnt.h"
-#include "mdem/parallel_bond.h"
-#include "mdem/system.h"
-#include "mdem/tube_builder.h"
+#include "mdem/core/cnt.h"
+#include "mdem/force/bond/parallel_bond.h"
+#include "mdem/integrate/system.h"
+#include "mdem/scene/tube_builder.h"
 #include "support.h"
 
 using namespace mdem;

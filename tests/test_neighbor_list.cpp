@@ -15,11 +15,11 @@
 #include <utility>
 #include <vector>
 
-#include "mdem/cnt.h"
-#include "mdem/film_builder.h"
-#include "mdem/neighbor_list.h"
-#include "mdem/parallel_bond.h"
-#include "mdem/tube_builder.h"
+#include "mdem/core/cnt.h"
+#include "mdem/force/bond/parallel_bond.h"
+#include "mdem/neighbor/neighbor_list.h"
+#include "mdem/scene/film_builder.h"
+#include "mdem/scene/tube_builder.h"
 
 using namespace mdem;
 

@@ -12,11 +12,11 @@
 #include <string>
 #include <vector>
 
-#include "mdem/cnt.h"
-#include "mdem/elements.h"
-#include "mdem/force_model.h"
-#include "mdem/parallel_bond.h"
-#include "mdem/tube_builder.h"
+#include "mdem/core/cnt.h"
+#include "mdem/core/elements.h"
+#include "mdem/force/bond/parallel_bond.h"
+#include "mdem/force/force_model.h"
+#include "mdem/scene/tube_builder.h"
 
 namespace mdem {
 namespace {

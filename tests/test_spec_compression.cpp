@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
+#include "mdem/core/units.h"
 #include "mdem/spec.h"
 #include "mdem/spec_job.h"
-#include "mdem/units.h"
 #include "spec_support.h"
 
 using google::protobuf::util::MessageDifferencer;

@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "mdem/twist_job.h"
-#include "mdem/units.h"
+#include "mdem/core/units.h"
+#include "mdem/job/twist_job.h"
 
 namespace mdem {
 namespace {

@@ -6,12 +6,12 @@
 #include <cmath>
 #include <numbers>
 
-#include "mdem/cnt.h"
-#include "mdem/hex_rope.h"
-#include "mdem/rope_observables.h"
-#include "mdem/system.h"
-#include "mdem/twist_protocol.h"
-#include "mdem/units.h"
+#include "mdem/core/cnt.h"
+#include "mdem/core/units.h"
+#include "mdem/integrate/system.h"
+#include "mdem/observe/rope_observables.h"
+#include "mdem/protocol/twist_protocol.h"
+#include "mdem/scene/hex_rope.h"
 
 namespace mdem {
 namespace {

@@ -1,9 +1,9 @@
 // The units table against independently derived SI numbers (model.md §1).
 #include <gtest/gtest.h>
 
-#include "mdem/cnt.h"
-#include "mdem/system.h"
-#include "mdem/units.h"
+#include "mdem/core/cnt.h"
+#include "mdem/core/units.h"
+#include "mdem/integrate/system.h"
 
 using namespace mdem;
 

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "mdem/compression_job.h"
+#include "mdem/job/compression_job.h"
 
 namespace mdem::cli {
 

@@ -8,7 +8,7 @@
 #include <string>
 
 #include "flags.h"
-#include "mdem/job.h"
+#include "mdem/job/job.h"
 
 namespace mdem::cli {
 

@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "mdem/snapshot.h"
+#include "mdem/observe/snapshot.h"
 #include "results_store.h"
 
 namespace mdem::cli {

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "flags.h"
-#include "mdem/system.h"
+#include "mdem/integrate/system.h"
 #include "spec_flags.h"
 
 namespace mdem::cli {

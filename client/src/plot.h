@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "mdem/snapshot.h"
+#include "mdem/observe/snapshot.h"
 
 namespace mdem::cli {
 

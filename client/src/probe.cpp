@@ -16,13 +16,13 @@
 #include <vector>
 
 #include "flags.h"
-#include "mdem/anisotropic_vdw.h"
 #include "mdem/cli.h"
-#include "mdem/cnt.h"
-#include "mdem/elements.h"
-#include "mdem/parallel_bond.h"
-#include "mdem/tube_builder.h"
-#include "mdem/units.h"
+#include "mdem/core/cnt.h"
+#include "mdem/core/elements.h"
+#include "mdem/core/units.h"
+#include "mdem/force/bond/parallel_bond.h"
+#include "mdem/force/contact/anisotropic_vdw.h"
+#include "mdem/scene/tube_builder.h"
 
 namespace mdem::cli {
 namespace {

@@ -8,10 +8,10 @@
 
 #include "flags.h"
 #include "jobs.h"
-#include "mdem/bundle_scene.h"
 #include "mdem/cli.h"
+#include "mdem/core/units.h"
+#include "mdem/scene/bundle_scene.h"
 #include "mdem/spec_job.h"
-#include "mdem/units.h"
 
 namespace mdem::cli {
 namespace {

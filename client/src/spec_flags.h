@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "flags.h"
-#include "mdem/job.h"
+#include "mdem/job/job.h"
 #include "mdem/spec.h"
 #include "mdem/v1/job.pb.h"
 

@@ -2,7 +2,7 @@
 
 #include <sstream>
 
-#include "mdem/twist_job.h"
+#include "mdem/job/twist_job.h"
 
 namespace mdem::cli {
 

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "mdem/core/units.h"
 #include "mdem/spec.h"
-#include "mdem/units.h"
 
 namespace mdem {
 

@@ -15,7 +15,7 @@
 #include "config.h"
 #include "event_writer.h"
 #include "job_store.h"
-#include "mdem/job.h"
+#include "mdem/job/job.h"
 
 namespace mdem::server {
 

@@ -1,6 +1,6 @@
 #pragma once
 // Snapshots as mdem.v1.SnapshotData, the form the daemon streams and the client reassembles.
-#include "mdem/snapshot.h"
+#include "mdem/observe/snapshot.h"
 #include "mdem/v1/results.pb.h"
 
 namespace mdem {

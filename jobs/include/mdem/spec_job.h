@@ -7,9 +7,9 @@
 #include <string>
 #include <string_view>
 
-#include "mdem/compression_job.h"
-#include "mdem/job.h"
-#include "mdem/twist_job.h"
+#include "mdem/job/compression_job.h"
+#include "mdem/job/job.h"
+#include "mdem/job/twist_job.h"
 #include "mdem/v1/job.pb.h"
 
 namespace mdem {

@@ -1,0 +1,88 @@
+#pragma once
+// Rigid 6-DOF elements stored as a structure of arrays: one contiguous array per field, so a
+// kernel touches only the fields it names (positions and orientations for forces, velocities for
+// the integrator).
+#include <array>
+#include <cstdint>
+#include <cstdlib>
+#include <vector>
+
+#include "mdem/core/math.h"
+
+namespace mdem {
+
+// Wall: a rigid flat platen (granular scenes): its plane passes through x with unit normal body
+// z (q * UnitZ), pointing towards the material; it moves only as prescribed.
+enum class ElementKind : std::uint8_t { CntSegment = 0, Nanoparticle = 1, Grain = 2, Wall = 3 };
+
+// How one degree of freedom moves. Translational DOFs are world x, y, z; rotational DOFs are
+// rotations about world x, y, z.
+enum class DofMode : std::uint8_t {
+  Free = 0,        // integrated from forces (plus any external load)
+  Fixed = 1,       // never moves
+  Prescribed = 2,  // moves at the prescribed velocity, whatever the forces
+};
+
+// What a caller gives to create one element. All quantities in internal units (units.h).
+struct ElementInit {
+  ElementKind kind = ElementKind::CntSegment;
+  Vec3 x = Vec3::Zero();
+  Quat q = Quat::Identity();
+  Vec3 v = Vec3::Zero();
+  Vec3 w = Vec3::Zero();        // angular velocity, world frame (rad/ps)
+  double mass = 0;              // eV·ps²/nm²
+  Vec3 inertia = Vec3::Zero();  // principal moments in the body frame (eV·ps²)
+  double radius = 0;            // nm
+  std::int32_t tube = -1;       // tube id for CNT segments, -1 otherwise
+  std::int32_t index = -1;      // index along the tube
+};
+
+struct Elements {
+  // State.
+  std::vector<Vec3> x;  // centre position (nm)
+  std::vector<Quat> q;  // orientation, unit quaternion, body -> world; a CNT axis is body x
+  std::vector<Vec3> v;  // velocity (nm/ps)
+  std::vector<Vec3> w;  // angular velocity, world frame (rad/ps)
+  // Properties.
+  std::vector<double> mass;
+  std::vector<double> inv_mass;
+  std::vector<Vec3> inertia;  // principal, body frame
+  std::vector<double> radius;
+  std::vector<ElementKind> kind;
+  std::vector<std::int32_t> tube;
+  std::vector<std::int32_t> index;
+  // Degrees of freedom: [0..2] translation x,y,z; [3..5] rotation about x,y,z (world).
+  std::vector<std::array<DofMode, 6>> dof;
+  std::vector<Vec3> v_prescribed;  // used where a translational DOF is Prescribed
+  std::vector<Vec3> w_prescribed;  // used where a rotational DOF is Prescribed
+  std::vector<Vec3> f_ext;         // external force (eV/nm), acts on Free DOFs
+  std::vector<Vec3> t_ext;         // external torque (eV), acts on Free DOFs
+  // Interaction results of the last force evaluation (internal forces only, no external load).
+  std::vector<Vec3> f;
+  std::vector<Vec3> t;
+
+  std::size_t size() const { return x.size(); }
+
+  // Appends one element; returns its index. Throws std::invalid_argument on a non-finite or
+  // non-positive mass, inertia or radius, or a non-finite position, orientation or velocity.
+  std::size_t add(const ElementInit& e);
+
+  // Axis of a CNT segment (body x in world frame).
+  Vec3 axis(std::size_t i) const { return q[i] * Vec3::UnitX(); }
+
+  bool is_isotropic(std::size_t i) const {
+    const Vec3& I = inertia[i];
+    return std::abs(I.x() - I.y()) <= 1e-12 * I.x() && std::abs(I.x() - I.z()) <= 1e-12 * I.x();
+  }
+
+  void fix_all(std::size_t i) { dof[i].fill(DofMode::Fixed); }
+
+  // Whether a CNT-CNT pair model leaves (i, j) out: not both CNT segments, or segments of one
+  // tube fewer than `exclusion` indices apart (model.md §4's intra-tube exclusion).
+  bool cnt_pair_excluded(std::size_t i, std::size_t j, int exclusion) const {
+    if (kind[i] != ElementKind::CntSegment || kind[j] != ElementKind::CntSegment) return true;
+    return tube[i] >= 0 && tube[i] == tube[j] && std::abs(index[i] - index[j]) < exclusion;
+  }
+};
+
+}  // namespace mdem

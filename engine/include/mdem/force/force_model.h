@@ -1,0 +1,105 @@
+#pragma once
+// The contract between the system and every force computation (bonds, contacts, dampers).
+//
+// A model reads element state and writes forces, torques and energy into per-thread slots of a
+// ForceSink, so the threaded force loop has no races and sums in a fixed order (deterministic at
+// a fixed thread count). A model that acts on pairs within a cutoff declares it; the system then
+// builds one neighbour list (cell list + Verlet skin) for all such models.
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "mdem/core/elements.h"
+#include "mdem/core/energy.h"
+
+namespace mdem {
+
+class NeighborList;
+class StateWriter;
+class StateReader;
+
+// Loops over fewer items than this run on one thread: waking a team costs more than it saves, and
+// on a loaded machine spinning threads can cost far more.
+inline constexpr long kParallelMinItems = 2048;
+
+// Per-thread accumulation buffers, reduced into the system's force arrays after all models ran.
+// Conservative forces go to force()/torque(); velocity-dependent damping forces go to
+// damping_force()/damping_torque(), so the integrator can book the energy they dissipate.
+class ForceSink {
+ public:
+  // with_damping: allocate the damping buffers (only when some model is dissipative).
+  void resize(std::size_t n_elements, int n_threads, bool with_damping);
+  void clear();
+  int threads() const { return static_cast<int>(force_.size()); }
+  Vec3* force(int thread) { return force_[thread].data(); }
+  Vec3* torque(int thread) { return torque_[thread].data(); }
+  Vec3* damping_force(int thread) { return damp_force_[thread].data(); }
+  Vec3* damping_torque(int thread) { return damp_torque_[thread].data(); }
+  EnergyTally& energy(int thread) { return energy_[thread]; }
+  bool has_damping() const { return !damp_force_.empty(); }
+  // Sums all threads in a fixed order into f, t (and fd, td when damping buffers exist),
+  // overwriting them, and returns the summed energy tally.
+  EnergyTally reduce(std::vector<Vec3>& f, std::vector<Vec3>& t, std::vector<Vec3>& fd,
+                     std::vector<Vec3>& td) const;
+
+ private:
+  std::vector<std::vector<Vec3>> force_, torque_, damp_force_, damp_torque_;
+  std::vector<EnergyTally> energy_;
+};
+
+// Upper bounds of the stiffness each element sees, for the critical time step (model.md §7).
+// Per element, summed over its interactions: kt translational, kr rotational (eV/rad), ktr the
+// translation-rotation coupling (eV/nm/rad, e.g. a shear spring times its lever arm), and c the
+// sum of the viscous dashpot coefficients acting on it (eV·ps/nm²).
+struct StiffnessSums {
+  std::vector<double> kt, kr, ktr, c;
+  void reset(std::size_t n) {
+    kt.assign(n, 0.0);
+    kr.assign(n, 0.0);
+    ktr.assign(n, 0.0);
+    c.assign(n, 0.0);
+  }
+  void add_pair(std::size_t i, std::size_t j, double k_t, double k_r, double k_tr) {
+    kt[i] += k_t;
+    kt[j] += k_t;
+    kr[i] += k_r;
+    kr[j] += k_r;
+    ktr[i] += k_tr;
+    ktr[j] += k_tr;
+  }
+};
+
+class ForceModel {
+ public:
+  virtual ~ForceModel() = default;
+  virtual std::string_view name() const = 0;
+
+  // > 0: the model acts on element pairs closer than this (nm) and is handed the neighbour list.
+  virtual double cutoff() const { return 0.0; }
+  // For pair models: whether the pair (i, j) is never an interaction of this model (e.g. two
+  // segments of one tube within the exclusion, or element kinds the model does not handle). The
+  // neighbour list leaves a pair out only if every pair model excludes it.
+  virtual bool excludes(const Elements&, std::size_t, std::size_t) const { return false; }
+
+  // True for velocity-dependent (damping) models, which write to the sink's damping buffers.
+  virtual bool dissipative() const { return false; }
+
+  // Adds forces, torques and energy of the current state to the sink, using the thread-local
+  // slot of omp_get_thread_num() inside its own `#pragma omp parallel for schedule(static)`.
+  // `pairs` is null for models with cutoff() == 0.
+  virtual void compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const = 0;
+
+  // Adds this model's stiffness bounds at the current state.
+  virtual void add_stiffness(const Elements& el, const NeighborList* pairs,
+                             StiffnessSums& s) const = 0;
+
+  // State that changes during a run (a bond's plastic slip, broken flags), for checkpoints; the
+  // system saves and loads it in a section named after the model. Stateless models keep these.
+  virtual void save_state(StateWriter&) const {}
+  virtual void load_state(StateReader&) {}
+};
+
+using ForceModelPtr = std::unique_ptr<ForceModel>;
+
+}  // namespace mdem

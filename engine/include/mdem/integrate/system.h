@@ -1,0 +1,157 @@
+#pragma once
+// A simulated system: elements, the force models a scene asked for, an optional neighbour list
+// (built only when some model acts on pairs), and the velocity-Verlet integrator with energy
+// bookkeeping, the critical-step check and the run guard.
+#include <array>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "mdem/core/elements.h"
+#include "mdem/core/energy.h"
+#include "mdem/force/force_model.h"
+#include "mdem/neighbor/neighbor_list.h"
+
+namespace mdem {
+
+class StateWriter;
+class StateReader;
+
+// A run that went numerically wrong: says at which step, which element and the likely cause.
+class NumericalError : public std::runtime_error {
+ public:
+  NumericalError(const std::string& what, long step, long element)
+      : std::runtime_error(what), step_(step), element_(element) {}
+  long step() const { return step_; }
+  long element() const { return element_; }  // -1 when no single element is to blame
+
+ private:
+  long step_, element_;
+};
+
+// A time step or setting that cannot be used; the message gives the allowed range.
+class ConfigError : public std::invalid_argument {
+  using std::invalid_argument::invalid_argument;
+};
+
+struct IntegratorSettings {
+  std::optional<double> dt;    // ps; empty = auto (safety × critical step)
+  double safety = 0.6;         // fraction of the critical step that is safe
+  double local_damping = 0.0;  // PFC local damping α in [0, 1)
+  double skin = 0.5;           // neighbour-list skin (nm)
+  int threads = 0;             // 0: OpenMP's default
+  // Run guard.
+  int guard_every = 100;  // steps between energy-balance checks
+  // Unexplained energy growth, as a fraction of the energy in play (initial kinetic energy, work
+  // put in, energy dissipated or released), that stops the run. Velocity Verlet's bounded
+  // fluctuation at the default step stays well below it; an instability grows past it fast.
+  double guard_energy_tolerance = 0.5;
+};
+
+class System {
+ public:
+  explicit System(Elements el, IntegratorSettings s = {});
+  ~System();
+  System(const System&) = delete;
+  System& operator=(const System&) = delete;
+  System(System&&) noexcept;
+  System& operator=(System&&) noexcept;
+
+  Elements& elements() { return el_; }
+  const Elements& elements() const { return el_; }
+  const IntegratorSettings& settings() const { return settings_; }
+
+  // Adds a force model; returns a pointer to it (owned by the system).
+  template <class M>
+  M* add(std::unique_ptr<M> m) {
+    M* raw = m.get();
+    models_.push_back(std::move(m));
+    initialized_ = false;
+    return raw;
+  }
+  template <class M>
+  M* find() const {
+    for (const auto& m : models_)
+      if (auto* p = dynamic_cast<M*>(m.get())) return p;
+    return nullptr;
+  }
+  const std::vector<ForceModelPtr>& models() const { return models_; }
+
+  // Called before each force evaluation with the time it is for: protocols set external loads
+  // and prescribed velocities here (HOOMD's "updater").
+  using Updater = std::function<void(System&, double time)>;
+  void add_updater(Updater u) { updaters_.push_back(std::move(u)); }
+
+  // Validates the settings, builds the neighbour list if any model needs one, evaluates forces
+  // and energies, computes the critical step and picks or checks dt. Throws ConfigError for a dt
+  // above the safe limit (the message gives the limit) and NumericalError for non-finite state.
+  void initialize();
+  // Advances n steps (initializing first if needed). Throws NumericalError when the guard trips;
+  // the state is then that of the failing step and must not be reported as a result.
+  void run(long n);
+  void step() { run(1); }
+  bool initialized() const { return initialized_; }
+
+  // Checkpoints: everything a run changes (element state, loads and DOF modes, the forces of the
+  // last evaluation, energy ledger and guard figures, time, step count, dt, the neighbour list and
+  // each model's state), so that after load_state the next run() continues exactly as the saved
+  // system would have. load_state initializes the system (models and settings come from the
+  // job's spec, not the checkpoint), then overwrites its state; it throws CheckpointError when the
+  // checkpoint is of another scene (element count or properties differ, other models) or thread
+  // count (forces are summed per thread, so only the same count reproduces the run), and leaves
+  // the system unusable then. Updaters hold their own state: their owner saves it.
+  void save_state(StateWriter& w) const;
+  void load_state(StateReader& r);
+
+  double time() const { return time_; }
+  long steps() const { return steps_; }
+  double dt() const { return dt_; }
+  double critical_dt() const { return dt_critical_; }
+  // Largest safe step = safety × critical step.
+  double max_safe_dt() const { return settings_.safety * dt_critical_; }
+  int threads() const { return threads_; }
+
+  const EnergyLedger& energy() const { return ledger_; }
+  // |W_ext − (ΔE + E_diss)| over the energy in play: the largest of the initial kinetic energy,
+  // the work put in, the energy dissipated and the stored energy released.
+  double energy_balance_error() const;
+  // Damping forces of the last evaluation (contact dashpots + local damping), per element.
+  const std::vector<Vec3>& damping_forces() const { return fd_; }
+  const NeighborList* neighbors() const { return nlist_.get(); }
+
+  // Recomputes forces and energies at the current state without moving (after a caller edited
+  // positions or models).
+  void refresh();
+  // Critical step of the current configuration (does not change dt).
+  double compute_critical_dt() const;
+
+ private:
+  void compute_forces();
+  void update_kinetic();
+  void check_finite_forces() const;
+  void check_energy_growth();
+  void update_energy_scale();
+
+  Elements el_;
+  IntegratorSettings settings_;
+  std::vector<ForceModelPtr> models_;
+  std::vector<Updater> updaters_;
+  std::unique_ptr<NeighborList> nlist_;
+  ForceSink sink_;
+  std::vector<Vec3> fd_, td_;  // damping force / torque (model dampers + local damping)
+  std::vector<Vec3> f_prev_, t_prev_, fext_prev_, text_prev_;  // for work bookkeeping
+  std::vector<std::array<double, 2>> partial_sums_;  // per thread, for sums in a fixed order
+  EnergyLedger ledger_;
+  double energy_scale_ = 0;  // energy in play, for relative errors
+  double initial_kinetic_ = 0, initial_stored_ = 0;
+  double time_ = 0, dt_ = 0, dt_critical_ = 0;
+  long steps_ = 0;
+  int threads_ = 1;
+  bool initialized_ = false;
+  bool dissipative_ = false;
+};
+
+}  // namespace mdem

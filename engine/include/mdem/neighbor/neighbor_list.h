@@ -1,0 +1,62 @@
+#pragma once
+// Cell list + Verlet list with a skin (half list: each pair once, j listed under i with i < j).
+// Rebuilt only when some element has moved more than half the skin since the last build.
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "mdem/core/elements.h"
+
+namespace mdem {
+
+class StateWriter;
+class StateReader;
+
+class NeighborList {
+ public:
+  // Pairs closer than cutoff + skin at build time are listed.
+  NeighborList(double cutoff, double skin);
+
+  // Predicate that leaves a pair out of the list (true = exclude). Optional.
+  using Exclusion = std::function<bool(const Elements&, std::size_t, std::size_t)>;
+  void set_exclusion(Exclusion ex) { exclusion_ = std::move(ex); }
+
+  // True when the list must be rebuilt before it can be trusted for el's current positions.
+  bool needs_rebuild(const Elements& el) const;
+  // Builds the list (threaded over cells). Throws std::runtime_error on non-finite positions.
+  void build(const Elements& el);
+
+  double cutoff() const { return cutoff_; }
+  double skin() const { return skin_; }
+  std::size_t builds() const { return builds_; }
+  std::size_t pair_count() const { return neighbors_.size(); }
+  // Largest displacement of any element since the last build (nm).
+  double max_displacement(const Elements& el) const;
+
+  // Neighbours j > i of element i: neighbors()[offsets()[i] .. offsets()[i+1]).
+  const std::vector<std::uint32_t>& offsets() const { return offsets_; }
+  const std::vector<std::uint32_t>& neighbors() const { return neighbors_; }
+
+  // The list and the positions it was built at, for checkpoints: a resumed run rebuilds at the
+  // same steps, and between rebuilds iterates the same pairs in the same order. load_state checks
+  // cutoff and skin and that the list is well-formed for n_elements (throws CheckpointError).
+  void save_state(StateWriter& w) const;
+  void load_state(StateReader& r, std::size_t n_elements);
+
+ private:
+  double cutoff_, skin_;
+  Exclusion exclusion_;
+  std::vector<Vec3> x_at_build_;
+  std::vector<std::uint32_t> offsets_, neighbors_;
+  std::size_t builds_ = 0;
+
+  // Scratch of the build, kept between builds so a rebuild allocates nothing once warm.
+  std::vector<std::uint32_t> cell_of_;     // cell of each element
+  std::vector<std::uint32_t> cell_start_;  // CSR over cells: elements of cell c are
+  std::vector<std::uint32_t> cell_elem_;   //   cell_elem_[cell_start_[c] .. cell_start_[c+1])
+  std::vector<Vec3> cell_x_;               // positions in cell order (cache-friendly scan)
+  std::vector<std::vector<std::uint32_t>> thread_neighbors_;  // per-thread output
+  std::vector<std::size_t> thread_counts_;                    // entries used in each
+};
+
+}  // namespace mdem

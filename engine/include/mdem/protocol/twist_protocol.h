@@ -1,0 +1,105 @@
+#pragma once
+// Torsion of a rope by its grips (scenes.md "twist", thesis §4.2–4.3): a torque T about the rope
+// axis, opposite at the two ends, raised at a constant rate to T_max, then held; optionally
+// unloaded to measure the residual twist.
+//
+// The torque on a grip is a load, not a kinematic constraint: every grip element i gets a
+// tangential force F_i = λ m_i ẑ × r_i and a torque τ_i = λ I_i ẑ (r_i its offset from the grip's
+// mass centroid, perpendicular to the axis; I_i its moment of inertia about ẑ), with
+// λ = T / Σ(m_i r_i² + I_i). The grip's moment about the axis is then exactly T, the net force on
+// it is zero, and a grip left to itself would turn as a rigid body: the load does not distort it.
+// λ is recomputed from the current positions before every force evaluation, so the moment stays
+// T as the grip expands or slides; grips move freely along the axis.
+//
+// Boundary conditions during the hold:
+//   constant-moment   the grips keep the held torque and turn with the rope;
+//   twist-relaxation  the grip positions are held where they are (prescribed zero velocity; the
+//                     kinetic energy this removes is booked as constraint work), the torque is
+//                     removed and the grip elements spin freely, so physical twist relaxes while
+//                     the geometric twist stays (§4.3, end).
+// Unloading: constant-moment ramps the torque down at the same rate, then relaxes at zero torque;
+// twist-relaxation releases the grips and relaxes.
+#include <cstddef>
+#include <string_view>
+#include <vector>
+
+#include "mdem/core/math.h"
+
+namespace mdem {
+
+class System;
+struct Elements;
+class StateWriter;
+class StateReader;
+
+enum class TwistBoundary { ConstantMoment, TwistRelaxation };
+
+// How a grip carries the torque.
+enum class GripLoad {
+  // The grip's moment about the rope axis is T (forces and torques as described above): a rope
+  // twisted as a whole by a clamp that lets each tube end spin.
+  RigidGrip,
+  // Every grip element carries the moment T about the axis through its own centre, no force: the
+  // thesis's PFC reading (an applied moment on each grip ball). Each tube end is twisted by T, the
+  // grip as a whole by n·T, and the rope turns only as far as the twisted tubes make it.
+  PerElement,
+};
+enum class TwistPhase { Loading, Holding, Unloading, Relaxing, Done };
+std::string_view twist_phase_name(TwistPhase p);
+
+struct TwistLoading {
+  double torque_max = 0;  // eV (internal units: 1 nN·nm = 6.2415 eV)
+  double rate = 0;        // eV/ps
+  double hold = 0;        // ps
+  TwistBoundary boundary = TwistBoundary::ConstantMoment;
+  bool unload = false;
+  double unload_hold = 0;  // ps at zero load after unloading
+  GripLoad grip_load = GripLoad::RigidGrip;
+};
+
+class TwistProtocol {
+ public:
+  // Throws std::invalid_argument for a non-positive or non-finite torque or rate, negative hold
+  // times, empty grips, or a zero axis.
+  TwistProtocol(TwistLoading loading, std::vector<std::size_t> grip_a,
+                std::vector<std::size_t> grip_b, Vec3 axis = Vec3::UnitZ());
+
+  double ramp_time() const { return loading_.torque_max / loading_.rate; }
+  double duration() const;
+  TwistPhase phase_at(double t) const;
+  // Magnitude of the torque the grips carry at time t (0 on twist-relaxation grips once held).
+  double torque_at(double t) const;
+
+  // The updater: sets the grips' loads and DOF modes for time t. Grip b (z > 0) gets +T about
+  // the axis, grip a gets −T.
+  void apply(System& sys, double t);
+
+  const TwistLoading& loading() const { return loading_; }
+  const std::vector<std::size_t>& grip_a() const { return grip_a_; }
+  const std::vector<std::size_t>& grip_b() const { return grip_b_; }
+  const Vec3& axis() const { return axis_; }
+
+  // The phase apply() last saw (it acts on phase changes), for checkpoints. load_state throws
+  // CheckpointError when the checkpoint's loading differs from this protocol's.
+  void save_state(StateWriter& w) const;
+  void load_state(StateReader& r);
+
+ private:
+  void load_grip(Elements& el, const std::vector<std::size_t>& grip, double torque) const;
+  void hold_grip_positions(Elements& el, const std::vector<std::size_t>& grip) const;
+  void release_grip(Elements& el, const std::vector<std::size_t>& grip) const;
+
+  TwistLoading loading_;
+  std::vector<std::size_t> grip_a_, grip_b_;
+  Vec3 axis_;
+  TwistPhase last_phase_ = TwistPhase::Loading;
+};
+
+// Moment about `axis` (through the grip's mass centroid) of the internal forces and torques on a
+// grip's elements: at static equilibrium it balances the applied torque.
+double grip_reaction_moment(const Elements& el, const std::vector<std::size_t>& grip,
+                            const Vec3& axis);
+// Mass centroid of a set of elements.
+Vec3 mass_centroid(const Elements& el, const std::vector<std::size_t>& ids);
+
+}  // namespace mdem

@@ -1,0 +1,200 @@
+#include "mdem/force/bond/parallel_bond.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "mdem/core/cnt.h"
+
+namespace mdem {
+
+namespace {
+
+void require_stiffness(double v, const char* field) {
+  if (!std::isfinite(v) || v < 0)
+    throw std::invalid_argument(std::string("bond stiffness ") + field +
+                                " must be finite and >= 0, got " + std::to_string(v));
+}
+
+// The current bond geometry shared by bond_deformation and bond_eval.
+struct Kinematics {
+  Vec3 ai, aj;    // world centre -> bond point arms
+  Vec3 ui, uj;    // world bond directions of the two bodies
+  Vec3 m;         // ui + uj
+  double m_norm;  // |m|
+  Vec3 n;         // m / |m|
+  Vec3 g;         // gap between the two bond points
+  Vec3 theta;     // world rotation vector of R_j R_rel0⁻¹ R_iᵀ
+};
+
+Kinematics kinematics(const Bond& b, const Vec3& xi, const Quat& qi, const Vec3& xj,
+                      const Quat& qj) {
+  Kinematics k;
+  k.ai = qi * b.ci;
+  k.aj = qj * b.cj;
+  k.ui = qi * b.ni;
+  k.uj = qj * b.nj;
+  k.m = k.ui + k.uj;
+  k.m_norm = k.m.norm();
+  // |m| = 0 only when the two bond directions are exactly opposite (a 180° bend); fall back to
+  // body i's direction there so the result stays finite.
+  k.n = k.m_norm > 1e-12 ? Vec3(k.m / k.m_norm) : k.ui;
+  k.g = (xj + k.aj) - (xi + k.ai);
+  // Conjugates: unit quaternions, and quat_log is scale invariant anyway.
+  k.theta = quat_log(qj * b.q_rel0.conjugate() * qi.conjugate());
+  return k;
+}
+
+}  // namespace
+
+BondStiffness cnt_bond_stiffness() {
+  BondStiffness k;
+  k.kn_area = cnt::kBondKn * cnt::kBondArea;
+  k.ks_area = cnt::kBondKs * cnt::kBondArea;
+  k.kn_inertia = cnt::kBondKn * cnt::kBondI;
+  k.ks_polar = cnt::kBondKs * cnt::kBondJ;
+  return k;
+}
+
+Bond make_bond(const Elements& el, std::uint32_t i, std::uint32_t j, const BondStiffness& k) {
+  const std::size_t n = el.size();
+  if (i >= n || j >= n)
+    throw std::invalid_argument("bond element index out of range: i = " + std::to_string(i) +
+                                ", j = " + std::to_string(j) + ", " + std::to_string(n) +
+                                " elements");
+  if (i == j)
+    throw std::invalid_argument("bond element indices i and j must differ, both are " +
+                                std::to_string(i));
+  require_stiffness(k.kn_area, "kn_area");
+  require_stiffness(k.ks_area, "ks_area");
+  require_stiffness(k.kn_inertia, "kn_inertia");
+  require_stiffness(k.ks_polar, "ks_polar");
+
+  const Vec3 xi = el.x[i], xj = el.x[j];
+  const Vec3 dx = xj - xi;
+  const double len = dx.norm();
+  if (!(len > 0) || !std::isfinite(len))
+    throw std::invalid_argument("bond centres of elements " + std::to_string(i) + " and " +
+                                std::to_string(j) + " coincide (centre distance " +
+                                std::to_string(len) + ")");
+  const double ri = el.radius[i], rj = el.radius[j];
+  if (!(ri > 0) || !(rj > 0) || !std::isfinite(ri + rj))
+    throw std::invalid_argument("bond element radius must be finite and > 0");
+
+  const Quat qi = el.q[i].normalized(), qj = el.q[j].normalized();
+  const Vec3 p = xi + (ri / (ri + rj)) * dx;
+  const Vec3 d = dx / len;
+
+  Bond b;
+  b.i = i;
+  b.j = j;
+  b.ci = qi.conjugate() * (p - xi);
+  b.cj = qj.conjugate() * (p - xj);
+  b.ni = qi.conjugate() * d;
+  b.nj = qj.conjugate() * d;
+  b.q_rel0 = (qi.conjugate() * qj).normalized();
+  b.k = k;
+  return b;
+}
+
+BondDeformation bond_deformation(const Bond& b, const Vec3& xi, const Quat& qi, const Vec3& xj,
+                                 const Quat& qj) {
+  const Kinematics k = kinematics(b, xi, qi, xj, qj);
+  BondDeformation d;
+  d.n = k.n;
+  d.u_n = k.g.dot(k.n);
+  d.u_s = k.g - d.u_n * k.n;
+  d.theta_t = k.theta.dot(k.n);
+  d.theta_b = k.theta - d.theta_t * k.n;
+  return d;
+}
+
+// Gradient of U(g, n, θ) (see the header) and its chain rule to both bodies. Rotations are
+// world-frame perturbations R → exp(δφ) R, torque τ = −∂U/∂δφ.
+//   gap:   δg = δx_j + δφ_j×a_j − δx_i − δφ_i×a_i  ⇒ F_j = −G, F_i = G, τ_j = −a_j×G, τ_i = a_i×G
+//   axis:  δu = δφ×u, ∂U/∂m = (I − n nᵀ) ∂U/∂n / |m|  ⇒ τ_{i,j} = −u_{i,j} × ∂U/∂m
+//   rot.:  D = R_j R0⁻¹ R_iᵀ; exp(δφ_j) D ⇒ δθ = J_l⁻¹(θ) δφ_j; D exp(−δφ_i) ⇒ δθ = −J_l⁻ᵀ(θ) δφ_i
+//          ⇒ τ_j = −J_l⁻ᵀ ∂U/∂θ, τ_i = +J_l⁻¹ ∂U/∂θ
+BondResult bond_eval(const Bond& b, const Vec3& xi, const Quat& qi, const Vec3& xj,
+                     const Quat& qj) {
+  const Kinematics k = kinematics(b, xi, qi, xj, qj);
+  const BondStiffness& s = b.k;
+  const Vec3& n = k.n;
+  const Vec3& g = k.g;
+  const Vec3& th = k.theta;
+
+  const double gn = g.dot(n);
+  const Vec3 gs = g - gn * n;
+  const double tn = th.dot(n);
+  const Vec3 tb = th - tn * n;
+
+  BondResult r;
+  r.e_tension = 0.5 * s.kn_area * gn * gn;
+  r.e_shear = 0.5 * s.ks_area * gs.squaredNorm();
+  r.e_bending = 0.5 * s.kn_inertia * tb.squaredNorm();
+  r.e_torsion = 0.5 * s.ks_polar * tn * tn;
+
+  const Vec3 dU_dg = s.ks_area * g + (s.kn_area - s.ks_area) * gn * n;
+  const Vec3 dU_dth = s.kn_inertia * th + (s.ks_polar - s.kn_inertia) * tn * n;
+  const Vec3 dU_dn = (s.kn_area - s.ks_area) * gn * g + (s.ks_polar - s.kn_inertia) * tn * th;
+
+  r.fi = dU_dg;
+  r.fj = -dU_dg;
+  r.ti = k.ai.cross(dU_dg);
+  r.tj = -k.aj.cross(dU_dg);
+
+  if (k.m_norm > 1e-12) {
+    const Vec3 dU_dm = (dU_dn - n.dot(dU_dn) * n) / k.m_norm;
+    r.ti -= k.ui.cross(dU_dm);
+    r.tj -= k.uj.cross(dU_dm);
+  }
+
+  const Mat3 jinv = so3_left_jacobian_inverse(th);
+  r.ti += jinv * dU_dth;
+  r.tj -= jinv.transpose() * dU_dth;
+  return r;
+}
+
+void ParallelBond::compute(const Elements& el, const NeighborList*, ForceSink& sink) const {
+  if (bonds_.empty()) return;
+  const int nt = sink.threads();
+  if (nt < 1) throw std::logic_error("parallel_bond: force sink has no thread buffers");
+  const std::size_t nb = bonds_.size();
+  const Vec3* x = el.x.data();
+  const Quat* q = el.q.data();
+#pragma omp parallel num_threads(nt) if (static_cast <long>(nb) >= kParallelMinItems)
+  {
+    const int tid = omp_get_thread_num();
+    Vec3* f = sink.force(tid);
+    Vec3* t = sink.torque(tid);
+    BondTally tally;
+#pragma omp for schedule(static)
+    for (std::size_t k = 0; k < nb; ++k) {
+      const Bond& b = bonds_[k];
+      tally.apply(bond_eval(b, x[b.i], q[b.i], x[b.j], q[b.j]), b.i, b.j, f, t);
+    }
+    tally.add_to(sink.energy(tid));
+  }
+}
+
+void add_bond_stiffness(const Bond& b, StiffnessSums& s) {
+  const BondStiffness& k = b.k;
+  const double kt = std::max(k.kn_area, k.ks_area);
+  const double krot = std::max(k.kn_inertia, k.ks_polar);
+  const double ai = b.ci.norm(), aj = b.cj.norm();
+  s.kt[b.i] += kt;
+  s.kt[b.j] += kt;
+  s.kr[b.i] += krot + k.ks_area * ai * ai;
+  s.kr[b.j] += krot + k.ks_area * aj * aj;
+  s.ktr[b.i] += k.ks_area * ai;
+  s.ktr[b.j] += k.ks_area * aj;
+}
+
+void ParallelBond::add_stiffness(const Elements&, const NeighborList*, StiffnessSums& s) const {
+  for (const Bond& b : bonds_) add_bond_stiffness(b, s);
+}
+
+}  // namespace mdem

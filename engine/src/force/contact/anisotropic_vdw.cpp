@@ -1,0 +1,415 @@
+// Anisotropic CNT–CNT van der Waals contact (model.md §4).
+//
+// Variables. r = x2 − x1, R = |r|, n = r/R, c = b1·b2, s = sign(c) (+1 for c = 0), so s·b2 is the
+// flipped axis with b1·(s b2) = |c| = cos γ. With p1 = b1·n, p2 = b2·n:
+//   cos θ = b3·n = (p1 + s p2)/|b1 + s b2|,   u = cos²θ = (p1 + s p2)² / (2(1 + |c|)),
+//   cos 2θ = 2u − 1 = y,   cos 2kθ = T_k(y) (Chebyshev), so δ is a degree-5 polynomial in y;
+//   1 − cos 2γ = 2(1 − c²).
+// U is then a smooth function U(R, c, p1, p2) (the denominator 2(1 + |c|) ≥ 2 never vanishes, so
+// near-parallel, near-coaxial and crossed pairs need no special case), and
+//   dU/dr  = U_R n + (U_p1 (b1 − p1 n) + U_p2 (b2 − p2 n)) / R,   F1 = +dU/dr, F2 = −dU/dr,
+//   dU/db1 = U_c b2 + U_p1 n,  dU/db2 = U_c b1 + U_p2 n,            τ_i = −b_i × dU/db_i
+// (a rotation δφ moves an axis by δb = δφ × b, so δU = δφ · (b × dU/db)). These forces and torques
+// are the exact gradient of U: an undamped run conserves energy, and x1×F1 + x2×F2 + τ1 + τ2 = 0.
+//
+// The flip s is piecewise constant. Where b1·b2 changes sign, u jumps from (p1+p2)²/(2(1+|c|)) to
+// (p1−p2)²/(2(1+|c|)) unless p1 p2 = 0 (centre line perpendicular to an axis) — so U itself is
+// discontinuous across b1·b2 = 0. That is a property of the published model (its θ uses
+// b3 = (b1+b2)/|b1+b2| with the flipped b2), not of this implementation, and by default we keep it
+// literal. The jump can be large: two free segments crossing at R ≈ 1.8 nm that rotate through
+// γ = 90° can gain tens of eV (see the NVE test), so an undamped run is energy-conserving only
+// while no pair crosses that plane. VdwParams::flip_blend > 0 replaces u inside |c| < flip_blend by
+// a C¹ smoothstep blend of the two signed values (unchanged outside the window), which removes the
+// jump and keeps every invariance.
+//
+// Pfc mode (VdwTorque::Pfc) is Table 2-3 taken literally: the same translational forces (the radial
+// force −∂U/∂R n and the shear force −(1/R)∂U/∂θ are together exactly −dU/dr), but the only torque
+// is the aligning moment −∂U/∂γ from M's γ dependence, τ1 = −b1 × (∂U/∂c|_M b2), τ2 = −b2 ×
+// (∂U/∂c|_M b1). The torque from θ's dependence on the axes is dropped, so that law is not
+// conservative under rotation (and the total angular momentum of an isolated pair drifts).
+//
+// Coincident centres (R < 1e-12 nm): D = −2 whatever θ, so U = M f_c V(−2) is well defined, but its
+// gradient in r is a cone (direction-dependent); we return U, zero force, and the aligning torque
+// of M (the only part of the gradient that exists). As soon as the centres separate the linear
+// overlap branch pushes them apart with a finite force.
+// Non-finite input: vdw_pair assumes finite positions and unit axes. A NaN propagates into the
+// result (so the system's guard reports it); an infinite separation reads as beyond the cutoff.
+#include "mdem/force/contact/anisotropic_vdw.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <stdexcept>
+
+#include "mdem/neighbor/neighbor_list.h"
+
+namespace mdem {
+
+namespace {
+
+constexpr double kCoincident2 = 1e-24;  // R² below which the centres count as coincident (nm²)
+
+// Axis of a CNT segment: body x in the world frame (first column of the rotation matrix).
+inline Vec3 axis_of(const Quat& q) {
+  const double w = q.w(), x = q.x(), y = q.y(), z = q.z();
+  return Vec3(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y));
+}
+
+// V(D) and V'(D) on the Lennard-Jones-like branch.
+inline void lj(const VdwConstants& k, double d, double& v, double& dv) {
+  const VdwParams& p = k.p;
+  double da, db;  // D^-α, D^-β
+  const double inv = 1.0 / d;
+  if (k.fast_lj) {
+    const double inv2 = inv * inv;
+    const double inv4 = inv2 * inv2;
+    db = inv4;
+    da = inv4 * inv4 * std::sqrt(inv2 * inv);  // D^-8 · D^-1.5
+  } else {
+    da = std::pow(d, -p.alpha);
+    db = std::pow(d, -p.beta);
+  }
+  v = k.four_eps * (p.A * da - p.B * db);
+  dv = k.four_eps * (-p.alpha * p.A * da + p.beta * p.B * db) * inv;
+}
+
+inline double lj_second(const VdwParams& p, double four_eps, double d) {
+  return four_eps * (p.alpha * (p.alpha + 1) * p.A * std::pow(d, -p.alpha - 2) -
+                     p.beta * (p.beta + 1) * p.B * std::pow(d, -p.beta - 2));
+}
+
+// V(D), V'(D) with the linear (C¹) continuation below d_min.
+inline void potential(const VdwConstants& k, double d, double& v, double& dv) {
+  if (d >= k.p.d_min) {
+    lj(k, d, v, dv);
+  } else {
+    v = k.v_dmin + k.dv_dmin * (d - k.p.d_min);
+    dv = k.dv_dmin;
+  }
+}
+
+// δ and dδ/du as functions of u = cos²θ.
+inline void delta_of_u(const VdwConstants& k, double u, double& delta, double& ddelta_du) {
+  const double y = 2.0 * u - 1.0;
+  const auto& a = k.delta_poly;
+  delta = a[0] + y * (a[1] + y * (a[2] + y * (a[3] + y * (a[4] + y * a[5]))));
+  const double dy = a[1] + y * (2 * a[2] + y * (3 * a[3] + y * (4 * a[4] + y * 5 * a[5])));
+  ddelta_du = 2.0 * dy;
+}
+
+// Smoothstep cutoff f_c(R) and its derivative.
+inline void cutoff_fn(const VdwConstants& k, double R, double& fc, double& dfc) {
+  const double t = R * k.inv_T - 3.0;
+  if (t <= 0.0) {
+    fc = 1.0;
+    dfc = 0.0;
+  } else if (t >= 1.0) {
+    fc = 0.0;
+    dfc = 0.0;
+  } else {
+    fc = 1.0 - t * t * (3.0 - 2.0 * t);
+    dfc = 6.0 * t * (t - 1.0) * k.inv_T;
+  }
+}
+
+// W(R) and W'(R), given 1/R.
+inline void w_of_r(const VdwConstants& k, double R, double inv_R, double& w, double& dw) {
+  const VdwParams& p = k.p;
+  const double rho = R * k.inv_r;
+  if (rho > p.w_knee) {
+    if (k.fast_w) {
+      const double inv = p.radius * inv_R;  // 1/ρ
+      const double inv2 = inv * inv;
+      const double inv4 = inv2 * inv2;
+      w = p.w_prefactor * inv4 * inv2 * std::sqrt(inv2 * inv);  // ρ^-6 · ρ^-1.5
+    } else {
+      w = p.w_prefactor * std::pow(rho, -p.w_exponent);
+    }
+    dw = -p.w_exponent * w * inv_R;
+  } else {
+    w = k.w_knee_value;
+    dw = 0.0;
+  }
+}
+
+// u = cos²θ of one flip sign s and its partial derivatives in (p1, p2, c).
+struct CosTheta2 {
+  double u, u_p1, u_p2, u_c;
+};
+[[gnu::always_inline]] inline CosTheta2 cos_theta2_signed(double s, double c, double p1,
+                                                          double p2) {
+  const double q = p1 + s * p2;
+  const double inv_h = 0.5 / (1.0 + s * c);  // 1/|b1 + s b2|² (≥ 1/4 for unit axes)
+  const double u = q * q * inv_h;
+  const double u_p1 = 2.0 * q * inv_h;
+  return {u, u_p1, s * u_p1, -2.0 * s * u * inv_h};
+}
+
+// u = cos²θ of the model (s = sign(c)), or, when |c| < blend, the C¹ blend
+// u = w(c) u₊ + (1 − w(c)) u₋ with the smoothstep w from 0 at c = −blend to 1 at c = +blend.
+// w(−c) = 1 − w(c) and u₊(−c, −p2) = u₋(c, p2), so the blend keeps U even in each axis.
+[[gnu::always_inline]] inline CosTheta2 cos_theta2(const VdwConstants& k, double c, double p1,
+                                                   double p2) {
+  const double blend = k.p.flip_blend;
+  if (!(std::abs(c) < blend)) return cos_theta2_signed(c < 0.0 ? -1.0 : 1.0, c, p1, p2);
+  const CosTheta2 a = cos_theta2_signed(1.0, c, p1, p2), b = cos_theta2_signed(-1.0, c, p1, p2);
+  const double t = 0.5 * (c + blend) / blend;
+  const double w = t * t * (3.0 - 2.0 * t);
+  const double dw = 3.0 * t * (1.0 - t) / blend;  // dw/dc
+  return {b.u + w * (a.u - b.u), b.u_p1 + w * (a.u_p1 - b.u_p1), b.u_p2 + w * (a.u_p2 - b.u_p2),
+          b.u_c + w * (a.u_c - b.u_c) + dw * (a.u - b.u)};
+}
+
+// Returns false (and leaves out untouched) beyond the cutoff.
+[[gnu::always_inline]] inline bool eval_pair(const VdwConstants& k, const Vec3& x1, const Vec3& b1,
+                                             const Vec3& x2, const Vec3& b2, VdwPairResult& out) {
+  const Vec3 rv = x2 - x1;
+  const double R2 = rv.squaredNorm();
+  if (R2 >= k.cutoff2) return false;  // (a NaN fails this test and propagates below)
+  const double c = b1.dot(b2);
+  const double one_minus_c2 = 1.0 - c * c;
+
+  double w, dw;
+  if (R2 < kCoincident2) {
+    // Coincident centres: D = −2 for every θ (see the file comment).
+    w_of_r(k, 0.0, 0.0, w, dw);
+    double v, dv;
+    potential(k, -2.0, v, dv);
+    const double M = 1.0 + 2.0 * w * one_minus_c2;
+    out.energy = M * v;
+    const double uc = -4.0 * w * c * v;  // ∂U/∂c through M
+    const Vec3 b12 = b1.cross(b2);
+    out.t1 = -uc * b12;
+    out.t2 = uc * b12;
+    return true;
+  }
+
+  const double R = std::sqrt(R2);
+  const double inv_R = 1.0 / R;
+  const Vec3 n = rv * inv_R;
+  const double p1 = b1.dot(n), p2 = b2.dot(n);
+  const CosTheta2 ct = cos_theta2(k, c, p1, p2);
+
+  double delta, ddelta_du;
+  delta_of_u(k, ct.u, delta, ddelta_du);
+  const double inv_delta = 1.0 / delta;
+  const double d = R * k.inv_r * inv_delta - 2.0;
+  double v, dv;
+  potential(k, d, v, dv);
+  double fc, dfc;
+  cutoff_fn(k, R, fc, dfc);
+  w_of_r(k, R, inv_R, w, dw);
+  const double M = 1.0 + 2.0 * w * one_minus_c2;
+  out.energy = M * fc * v;
+
+  const double mfc = M * fc;
+  const double dM_dR = 2.0 * dw * one_minus_c2;
+  const double dM_dc = -4.0 * w * c;
+  // ∂U/∂R at fixed (c, p1, p2); ∂D/∂R = 1/(r δ).
+  const double U_R = (dM_dR * fc + M * dfc) * v + mfc * dv * k.inv_r * inv_delta;
+  // ∂U/∂u through δ; ∂D/∂δ = −R/(r δ²) = −(D + 2)/δ.
+  const double U_u = -mfc * dv * (d + 2.0) * inv_delta * ddelta_du;
+  const double U_p1 = U_u * ct.u_p1;
+  const double U_p2 = U_u * ct.u_p2;
+  const double U_cM = dM_dc * fc * v;  // through M (γ) only
+  const double U_c = U_cM + U_u * ct.u_c;
+
+  const Vec3 g = U_R * n + ((U_p1 * b1 + U_p2 * b2) - (U_p1 * p1 + U_p2 * p2) * n) * inv_R;
+  out.f1 = g;
+  out.f2 = -g;
+  const Vec3 b12 = b1.cross(b2);
+  if (k.p.torque == VdwTorque::Exact) {
+    out.t1 = -U_c * b12 - U_p1 * b1.cross(n);
+    out.t2 = U_c * b12 - U_p2 * b2.cross(n);
+  } else {
+    out.t1 = -U_cM * b12;
+    out.t2 = U_cM * b12;
+  }
+  return true;
+}
+
+// Bound of |∂²U/∂R²| at centre distance R, given δ, with γ = 90° (largest M).
+double radial_bound(const VdwConstants& k, double R, double delta) {
+  const VdwParams& p = k.p;
+  if (!(R < p.cutoff())) return 0.0;
+  const double a = k.inv_r / delta;  // ∂D/∂R
+  const double d = R * a - 2.0;
+  const double dc = std::max(d, p.d_min);
+  double v, dv;
+  potential(k, d, v, dv);
+  const double ddv = lj_second(p, k.four_eps, dc);
+  double fc, dfc;
+  cutoff_fn(k, R, fc, dfc);
+  const double t = R * k.inv_T - 3.0;
+  const double ddfc = (t > 0.0 && t < 1.0) ? (12.0 * t - 6.0) * k.inv_T * k.inv_T : 0.0;
+  double w, dw;
+  w_of_r(k, R, 1.0 / R, w, dw);
+  const double ddw = R * k.inv_r > p.w_knee ? p.w_exponent * (p.w_exponent + 1) * w / (R * R) : 0.0;
+  const double M = 1.0 + 2.0 * w, dM = 2.0 * dw, ddM = 2.0 * ddw;
+  return std::abs(ddM * fc * v) + std::abs(M * ddfc * v) + std::abs(M * fc * ddv) * a * a +
+         2.0 * (std::abs(dM * dfc * v) + std::abs(dM * fc * dv) * a + std::abs(M * dfc * dv) * a);
+}
+
+}  // namespace
+
+VdwConstants::VdwConstants(const VdwParams& params) : p(params) {
+  if (!(p.radius > 0) || !(p.segment_length > 0) || !(p.d_min > 0))
+    throw std::invalid_argument("vdW parameters: radius, segment length and d_min must be > 0");
+  // The blend's u₋ = (p1 − p2)²/(2(1 − c)) must stay away from c = 1.
+  if (!(p.flip_blend >= 0 && p.flip_blend <= 0.5))
+    throw std::invalid_argument("vdW parameters: flip_blend must be in [0, 0.5]");
+  four_eps = 4.0 * p.epsilon;
+  inv_r = 1.0 / p.radius;
+  inv_T = 1.0 / p.segment_length;
+  cutoff2 = p.cutoff() * p.cutoff();
+  fast_lj = p.alpha == 9.5 && p.beta == 4.0;
+  fast_w = p.w_exponent == 7.5;
+  // δ = 1 + Σ C_k ((−1)^{k−1} + T_k(y)), expanded into monomials of y via the Chebyshev recursion.
+  std::array<std::array<double, 6>, 6> T{};  // T[k][m]: coefficient of y^m in T_k
+  T[0][0] = 1.0;
+  T[1][1] = 1.0;
+  for (int kk = 2; kk <= 5; ++kk)
+    for (int m = 0; m <= 5; ++m) T[kk][m] = (m > 0 ? 2.0 * T[kk - 1][m - 1] : 0.0) - T[kk - 2][m];
+  delta_poly.fill(0.0);
+  delta_poly[0] = 1.0;
+  for (int kk = 1; kk <= 5; ++kk) {
+    const double ck = p.C[kk - 1];
+    delta_poly[0] += ck * (kk % 2 == 1 ? 1.0 : -1.0);
+    for (int m = 0; m <= 5; ++m) delta_poly[m] += ck * T[kk][m];
+  }
+  lj(*this, p.d_min, v_dmin, dv_dmin);
+  ddv_dmin = lj_second(p, four_eps, p.d_min);
+  w_knee_value = p.w_prefactor * std::pow(p.w_knee, -p.w_exponent);
+}
+
+VdwPairResult vdw_pair(const VdwConstants& k, const Vec3& x1, const Vec3& b1, const Vec3& x2,
+                       const Vec3& b2) {
+  VdwPairResult out;
+  eval_pair(k, x1, b1, x2, b2, out);
+  return out;
+}
+
+VdwPairResult vdw_pair(const VdwParams& p, const Vec3& x1, const Vec3& b1, const Vec3& x2,
+                       const Vec3& b2) {
+  return vdw_pair(VdwConstants(p), x1, b1, x2, b2);
+}
+
+double vdw_delta(const VdwParams& p, double theta) {
+  const VdwConstants k(p);
+  const double cs = std::cos(theta);
+  double delta, dd;
+  delta_of_u(k, cs * cs, delta, dd);
+  return delta;
+}
+
+double vdw_potential(const VdwParams& p, double d) {
+  const VdwConstants k(p);
+  double v, dv;
+  potential(k, d, v, dv);
+  return v;
+}
+
+double vdw_radial_stiffness(const VdwParams& p, double R) {
+  return radial_bound(VdwConstants(p), R, 1.0);
+}
+
+namespace {
+
+double pair_stiffness(const VdwConstants& k, const Vec3& x1, const Vec3& b1, const Vec3& x2,
+                      const Vec3& b2) {
+  const VdwParams& p = k.p;
+  const Vec3 rv = x2 - x1;
+  const double R = rv.norm();
+  if (!(R < p.cutoff())) return 0.0;
+  const double side = radial_bound(k, R, 1.0);
+  if (R * R < kCoincident2) return side;
+  const Vec3 n = rv / R;
+  double delta, dd;
+  delta_of_u(k, cos_theta2(k, b1.dot(b2), b1.dot(n), b2.dot(n)).u, delta, dd);
+  return std::max(side, radial_bound(k, R, delta));
+}
+
+}  // namespace
+
+double vdw_pair_stiffness(const VdwParams& p, const Vec3& x1, const Vec3& b1, const Vec3& x2,
+                          const Vec3& b2) {
+  return pair_stiffness(VdwConstants(p), x1, b1, x2, b2);
+}
+
+bool AnisotropicVdw::excludes(const Elements& el, std::size_t i, std::size_t j) const {
+  return el.cnt_pair_excluded(i, j, p_.intra_tube_exclusion);
+}
+
+void AnisotropicVdw::compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const {
+  if (!pairs) throw std::logic_error("anisotropic_vdw: compute() needs a neighbour list");
+  const auto& off = pairs->offsets();
+  const auto& nb = pairs->neighbors();
+  const long n = static_cast<long>(el.size());
+  if (n == 0) return;
+  if (off.size() != el.size() + 1)
+    throw std::logic_error("anisotropic_vdw: neighbour list was not built for these elements");
+  const int excl = p_.intra_tube_exclusion;
+  const VdwConstants& k = k_;
+  const int nt = sink.threads();
+  // The pair loop is heavy: worth a team from a few thousand listed pairs on.
+  const bool threaded = static_cast<long>(pairs->pair_count()) >= 2 * kParallelMinItems;
+  axes_.resize(el.size());
+  Vec3* axes = axes_.data();
+
+#pragma omp parallel num_threads(nt) if (threaded)
+  {
+#pragma omp for schedule(static)
+    for (long i = 0; i < n; ++i) axes[i] = axis_of(el.q[i]);
+    const int tid = omp_get_thread_num();
+    Vec3* f = sink.force(tid);
+    Vec3* t = sink.torque(tid);
+    double energy = 0.0;
+#pragma omp for schedule(static, 64)
+    for (long i = 0; i < n; ++i) {
+      const std::uint32_t begin = off[i], end = off[i + 1];
+      if (begin == end || el.kind[i] != ElementKind::CntSegment) continue;
+      const Vec3 xi = el.x[i];
+      const Vec3 bi = axes[i];
+      Vec3 fi = Vec3::Zero(), ti = Vec3::Zero();
+      for (std::uint32_t m = begin; m < end; ++m) {
+        const std::uint32_t j = nb[m];
+        // The list is shared by all pair models, so this model's exclusion is applied here
+        // (a few integer compares).
+        if (el.cnt_pair_excluded(i, j, excl)) continue;
+        VdwPairResult r;
+        if (!eval_pair(k, xi, bi, el.x[j], axes[j], r)) continue;
+        energy += r.energy;
+        fi += r.f1;
+        ti += r.t1;
+        f[j] += r.f2;
+        t[j] += r.t2;
+      }
+      f[i] += fi;
+      t[i] += ti;
+    }
+    sink.energy(tid).add(EnergyTerm::Vdw, energy);
+  }
+}
+
+void AnisotropicVdw::add_stiffness(const Elements& el, const NeighborList* pairs,
+                                   StiffnessSums& s) const {
+  if (!pairs) return;
+  const auto& off = pairs->offsets();
+  const auto& nb = pairs->neighbors();
+  if (off.size() != el.size() + 1) return;
+  const double r = p_.radius;
+  for (std::size_t i = 0; i < el.size(); ++i) {
+    for (std::uint32_t m = off[i]; m < off[i + 1]; ++m) {
+      const std::size_t j = nb[m];
+      if (excludes(el, i, j)) continue;
+      const double kt = pair_stiffness(k_, el.x[i], axis_of(el.q[i]), el.x[j], axis_of(el.q[j]));
+      if (kt <= 0.0) continue;
+      // Rotational estimate: the contact acts at a lever arm of about one radius from each centre.
+      s.add_pair(i, j, kt, kt * r * r, kt * r);
+    }
+  }
+}
+
+}  // namespace mdem

@@ -1,0 +1,462 @@
+#include "mdem/integrate/system.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace mdem {
+
+namespace {
+
+std::string describe(const Elements& el, std::size_t i) {
+  std::ostringstream s;
+  s << "element " << i;
+  if (el.tube[i] >= 0) s << " (tube " << el.tube[i] << ", segment " << el.index[i] << ")";
+  return s.str();
+}
+
+bool is_free(DofMode m) { return m == DofMode::Free; }
+
+// Free rotation of a rigid body with principal inertia I (body frame) over time h, by the
+// symmetric splitting of Dullweber, Leimkuhler and McLachlan: each step is an exact rotation
+// about one body axis, so the scheme stays stable and norm-preserving under fast spin.
+void free_rotor(Quat& q, Vec3& L_world, const Vec3& I, double h) {
+  Vec3 Lb = q.conjugate() * L_world;
+  auto sub = [&](int axis, double tau) {
+    const double phi = Lb[axis] / I[axis] * tau;
+    Vec3 e = Vec3::Zero();
+    e[axis] = phi;
+    const Quat r = quat_exp(e);
+    q = q * r;
+    Lb = r.conjugate() * Lb;
+  };
+  sub(0, 0.5 * h);
+  sub(1, 0.5 * h);
+  sub(2, h);
+  sub(1, 0.5 * h);
+  sub(0, 0.5 * h);
+  q.normalize();
+  L_world = q * Lb;
+}
+
+Vec3 world_inertia_times(const Quat& q, const Vec3& I, const Vec3& w) {
+  return q * (I.cwiseProduct(q.conjugate() * w));
+}
+
+Vec3 world_inertia_inverse_times(const Quat& q, const Vec3& I, const Vec3& L) {
+  return q * ((q.conjugate() * L).cwiseQuotient(I));
+}
+
+// First half kick of one scalar DOF with inertia m (a mass, or an isotropic moment of inertia):
+// the force at t_n acts for h = dt/2. Books the damping power at v_n, and half of the coming
+// drift's work of the external load (free DOF) or of the constraint (prescribed DOF, including
+// the kinetic energy it injects when its velocity changes).
+inline void first_half_kick(DofMode mode, double& v, double F, double F_ext, double F_damp,
+                            double v_presc, double m, double inv_m, double h, double& work,
+                            double& diss) {
+  const double v0 = v;
+  diss -= F_damp * v0 * h;
+  switch (mode) {
+    case DofMode::Free:
+      v = v0 + h * (F + F_ext + F_damp) * inv_m;
+      work += F_ext * v * h;
+      break;
+    case DofMode::Prescribed:
+      work += 0.5 * m * (v_presc * v_presc - v0 * v0);
+      v = v_presc;
+      work -= (F + F_damp) * v * h;
+      break;
+    case DofMode::Fixed:
+      v = 0;
+      break;
+  }
+}
+
+// Second half kick of one scalar DOF with the forces at t_{n+1}: the other half of the drift's
+// work, then the damping power at v_{n+1}.
+inline void second_half_kick(DofMode mode, double& v, double F, double F_ext, double F_damp,
+                             double v_presc, double m, double inv_m, double h, double& work,
+                             double& diss) {
+  switch (mode) {
+    case DofMode::Free:
+      work += F_ext * v * h;
+      v += h * (F + F_ext + F_damp) * inv_m;
+      break;
+    case DofMode::Prescribed:
+      work -= (F + F_damp) * v * h;
+      work += 0.5 * m * (v_presc * v_presc - v * v);
+      v = v_presc;
+      break;
+    case DofMode::Fixed:
+      v = 0;
+      break;
+  }
+  diss -= F_damp * v * h;
+}
+
+// Half kick of the angular momentum of an anisotropic body (all rotational DOFs free).
+inline void kick_anisotropic(const Quat& q, const Vec3& I, Vec3& w, const Vec3& torque, double h) {
+  const Vec3 L = world_inertia_times(q, I, w) + h * torque;
+  w = world_inertia_inverse_times(q, I, L);
+}
+
+// Adds body(i, a, b)'s contributions to a and b over i in [0, n), threaded, in a fixed order:
+// each thread sums its static block into its own slot and the slots are added in thread order.
+// OpenMP's reduction(+) adds the threads' sums in the order they finish, which changes the last
+// bits from run to run, so a run (and a run resumed from a checkpoint) would not repeat exactly.
+template <class Body>
+void ordered_sums(long n, std::vector<std::array<double, 2>>& partial, double& a, double& b,
+                  Body body) {
+  std::fill(partial.begin(), partial.end(), std::array<double, 2>{0.0, 0.0});
+  const int team = static_cast<int>(partial.size());
+#pragma omp parallel num_threads(team) if (n >= kParallelMinItems)
+  {
+    double ta = 0, tb = 0;
+#pragma omp for schedule(static)
+    for (long i = 0; i < n; ++i) body(i, ta, tb);
+    partial[omp_get_thread_num()] = {ta, tb};
+  }
+  for (const auto& p : partial) {
+    a += p[0];
+    b += p[1];
+  }
+}
+
+}  // namespace
+
+System::System(Elements el, IntegratorSettings s) : el_(std::move(el)), settings_(s) {}
+System::~System() = default;
+System::System(System&&) noexcept = default;
+System& System::operator=(System&&) noexcept = default;
+
+void System::initialize() {
+  const IntegratorSettings& s = settings_;
+  auto bad = [](const std::string& m) { throw ConfigError(m); };
+  if (!std::isfinite(s.safety) || s.safety <= 0 || s.safety > 1)
+    bad("safety must be in (0, 1], got " + std::to_string(s.safety));
+  if (!std::isfinite(s.local_damping) || s.local_damping < 0 || s.local_damping >= 1)
+    bad("local_damping must be in [0, 1), got " + std::to_string(s.local_damping));
+  if (!std::isfinite(s.skin) || s.skin <= 0 || s.skin > 100)
+    bad("skin must be in (0, 100] nm, got " + std::to_string(s.skin));
+  if (s.threads < 0 || s.threads > 1024)
+    bad("threads must be in [0, 1024] (0 = all cores), got " + std::to_string(s.threads));
+  if (s.guard_every < 1) bad("guard_every must be >= 1 step");
+  if (!std::isfinite(s.guard_energy_tolerance) || s.guard_energy_tolerance <= 0)
+    bad("guard_energy_tolerance must be finite and > 0");
+  if (s.dt && (!std::isfinite(*s.dt) || *s.dt <= 0))
+    bad("dt must be finite and > 0 ps (or auto), got " + std::to_string(*s.dt));
+  for (std::size_t i = 0; i < el_.size(); ++i) {
+    if (el_.is_isotropic(i)) continue;
+    for (int k = 3; k < 6; ++k)
+      if (!is_free(el_.dof[i][k]))
+        bad(describe(el_, i) +
+            ": rotational constraints need isotropic inertia (anisotropic bodies rotate freely)");
+  }
+
+  threads_ = s.threads > 0 ? s.threads : omp_get_max_threads();
+  omp_set_num_threads(threads_);
+
+  double cutoff = 0;
+  dissipative_ = s.local_damping > 0;
+  bool model_damping = false;
+  for (const auto& m : models_) {
+    cutoff = std::max(cutoff, m->cutoff());
+    model_damping = model_damping || m->dissipative();
+  }
+  dissipative_ = dissipative_ || model_damping;
+  if (cutoff > 0) {
+    nlist_ = std::make_unique<NeighborList>(cutoff, s.skin);
+    std::vector<const ForceModel*> pair_models;
+    for (const auto& m : models_)
+      if (m->cutoff() > 0) pair_models.push_back(m.get());
+    nlist_->set_exclusion([pair_models](const Elements& el, std::size_t i, std::size_t j) {
+      for (const ForceModel* m : pair_models)
+        if (!m->excludes(el, i, j)) return false;
+      return true;
+    });
+  } else {
+    nlist_.reset();
+  }
+
+  const std::size_t n = el_.size();
+  sink_.resize(n, threads_, model_damping);
+  partial_sums_.assign(threads_, {0.0, 0.0});
+  fd_.assign(n, Vec3::Zero());
+  td_.assign(n, Vec3::Zero());
+
+  for (auto& u : updaters_) u(*this, time_);
+  compute_forces();
+  check_finite_forces();
+
+  dt_critical_ = compute_critical_dt();
+  if (s.dt) {
+    if (*s.dt > max_safe_dt()) {
+      std::ostringstream m;
+      m << "time step dt = " << *s.dt << " ps is above the safe limit " << max_safe_dt()
+        << " ps (safety " << s.safety << " x critical step " << dt_critical_
+        << " ps from the stiffest bond/contact); use dt <= " << max_safe_dt() << " ps or dt: auto";
+      throw ConfigError(m.str());
+    }
+    dt_ = *s.dt;
+  } else {
+    if (!std::isfinite(dt_critical_))
+      bad("dt: auto needs at least one bond or contact to derive a step from; give dt in ps");
+    dt_ = max_safe_dt();
+  }
+
+  update_kinetic();
+  ledger_.initial_total = ledger_.total();
+  ledger_.external_work = 0;
+  ledger_.dissipated = 0;
+  initial_kinetic_ = ledger_.kinetic();
+  initial_stored_ = ledger_.potential.total_stored();
+  energy_scale_ = initial_kinetic_;
+  initialized_ = true;
+}
+
+void System::refresh() {
+  if (!initialized_) {
+    initialize();
+    return;
+  }
+  compute_forces();
+  check_finite_forces();
+  update_kinetic();
+}
+
+void System::compute_forces() {
+  if (nlist_ && nlist_->needs_rebuild(el_)) nlist_->build(el_);
+  sink_.clear();
+  for (const auto& m : models_) m->compute(el_, m->cutoff() > 0 ? nlist_.get() : nullptr, sink_);
+  ledger_.potential = sink_.reduce(el_.f, el_.t, fd_, td_);
+
+  // PFC local damping on the unbalanced force of every free DOF: F_k -= α|F_k| sign(v_k).
+  const double a = settings_.local_damping;
+  const bool model_damping = sink_.has_damping();
+  if (a == 0) return;  // fd_, td_ hold the model dampers' forces (or stay zero)
+  const long n = static_cast<long>(el_.size());
+#pragma omp parallel for schedule(static) if (n >= kParallelMinItems)
+  for (long i = 0; i < n; ++i) {
+    if (!model_damping) {
+      fd_[i].setZero();
+      td_[i].setZero();
+    }
+    for (int k = 0; k < 3; ++k) {
+      if (is_free(el_.dof[i][k])) {
+        const double F = el_.f[i][k] + el_.f_ext[i][k] + fd_[i][k];
+        const double vk = el_.v[i][k];
+        fd_[i][k] -= a * std::abs(F) * (vk > 0 ? 1.0 : vk < 0 ? -1.0 : 0.0);
+      }
+      if (is_free(el_.dof[i][k + 3])) {
+        const double M = el_.t[i][k] + el_.t_ext[i][k] + td_[i][k];
+        const double wk = el_.w[i][k];
+        td_[i][k] -= a * std::abs(M) * (wk > 0 ? 1.0 : wk < 0 ? -1.0 : 0.0);
+      }
+    }
+  }
+}
+
+void System::update_kinetic() {
+  double kt = 0, kr = 0;
+  const long n = static_cast<long>(el_.size());
+  ordered_sums(n, partial_sums_, kt, kr, [this](long i, double& kt_i, double& kr_i) {
+    kt_i += 0.5 * el_.mass[i] * el_.v[i].squaredNorm();
+    kr_i += 0.5 * el_.w[i].dot(world_inertia_times(el_.q[i], el_.inertia[i], el_.w[i]));
+  });
+  ledger_.kinetic_translational = kt;
+  ledger_.kinetic_rotational = kr;
+}
+
+double System::compute_critical_dt() const {
+  StiffnessSums s;
+  s.reset(el_.size());
+  for (const auto& m : models_) m->add_stiffness(el_, m->cutoff() > 0 ? nlist_.get() : nullptr, s);
+  double dt = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < el_.size(); ++i) {
+    const double m = el_.mass[i];
+    const double I = el_.inertia[i].minCoeff();
+    // Gershgorin bound of the largest eigenfrequency of M^-1/2 K M^-1/2 over this element's rows:
+    // each interaction contributes its diagonal and one off-diagonal block (factor 2), plus the
+    // translation-rotation coupling on both kinds of rows.
+    const double coupling = 2.0 * s.ktr[i] / std::sqrt(m * I);
+    const double w2 = std::max(2.0 * s.kt[i] / m, 2.0 * s.kr[i] / I) + coupling;
+    if (!(w2 > 0)) continue;
+    const double w = std::sqrt(w2);
+    // Damping lowers the limit: dt_c = (2/ω)(√(1+ζ²) − ζ), ζ ≤ Σc/(m ω).
+    const double zeta = s.c[i] / (m * w);
+    dt = std::min(dt, 2.0 / w * (std::sqrt(1.0 + zeta * zeta) - zeta));
+  }
+  return dt;
+}
+
+void System::check_finite_forces() const {
+  for (std::size_t i = 0; i < el_.size(); ++i) {
+    if (!el_.x[i].allFinite() || !el_.q[i].coeffs().allFinite())
+      throw NumericalError(describe(el_, i) + " has a non-finite position or orientation at step " +
+                               std::to_string(steps_),
+                           steps_, static_cast<long>(i));
+    if (!el_.f[i].allFinite() || !el_.t[i].allFinite() || !fd_[i].allFinite() ||
+        !td_[i].allFinite())
+      throw NumericalError("non-finite force or torque on " + describe(el_, i) + " at step " +
+                               std::to_string(steps_) +
+                               ": elements overlap so deeply that a contact diverges, or an input "
+                               "value is not finite",
+                           steps_, static_cast<long>(i));
+  }
+}
+
+void System::run(long nsteps) {
+  if (!initialized_) initialize();
+  omp_set_num_threads(threads_);
+  const double dt = dt_, h = 0.5 * dt_;
+  const long n = static_cast<long>(el_.size());
+  auto& E = el_;
+
+  for (long step = 0; step < nsteps; ++step) {
+    double work = 0, diss = 0;
+    // 1. First half kick with the forces at t_n; book half of the work of external loads and
+    //    constraints over the coming drift, and the power of damping at v_n.
+    // (work and diss in the body are the thread's partial sums.)
+    ordered_sums(n, partial_sums_, work, diss, [&](long i, double& work, double& diss) {
+      const auto& dof = E.dof[i];
+      for (int k = 0; k < 3; ++k)
+        first_half_kick(dof[k], E.v[i][k], E.f[i][k], E.f_ext[i][k], fd_[i][k],
+                        E.v_prescribed[i][k], E.mass[i], E.inv_mass[i], h, work, diss);
+      if (E.is_isotropic(i)) {
+        const double I = E.inertia[i].x(), iI = 1.0 / I;
+        for (int k = 0; k < 3; ++k)
+          first_half_kick(dof[k + 3], E.w[i][k], E.t[i][k], E.t_ext[i][k], td_[i][k],
+                          E.w_prescribed[i][k], I, iI, h, work, diss);
+      } else {  // anisotropic: all rotational DOFs free (checked in initialize)
+        diss -= td_[i].dot(E.w[i]) * h;
+        kick_anisotropic(E.q[i], E.inertia[i], E.w[i], E.t[i] + E.t_ext[i] + td_[i], h);
+        work += E.t_ext[i].dot(E.w[i]) * h;
+      }
+    });
+
+    // 2. Drift: positions, and orientations by the exact exponential map (isotropic bodies,
+    //    where ω is constant in free rotation) or the DLM splitting (anisotropic).
+    long runaway = -1;
+#pragma omp parallel for schedule(static) reduction(max : runaway) if (n >= kParallelMinItems)
+    for (long i = 0; i < n; ++i) {
+      const Vec3 dx = E.v[i] * dt;
+      E.x[i] += dx;
+      if (E.is_isotropic(i)) {
+        E.q[i] = (quat_exp(E.w[i] * dt) * E.q[i]).normalized();
+      } else {
+        Vec3 L = world_inertia_times(E.q[i], E.inertia[i], E.w[i]);
+        free_rotor(E.q[i], L, E.inertia[i], dt);
+        E.w[i] = world_inertia_inverse_times(E.q[i], E.inertia[i], L);
+      }
+      // An element moving more than its radius, or turning more than a radian, in one step is
+      // not being integrated any more.
+      if (!(dx.norm() <= E.radius[i]) || !(E.w[i].norm() * dt <= 1.0))
+        runaway = std::max(runaway, i);
+    }
+    if (runaway >= 0) {
+      const std::size_t i = static_cast<std::size_t>(runaway);
+      std::ostringstream m;
+      m << describe(E, i) << " moved " << (E.v[i] * dt).norm() << " nm and turned "
+        << E.w[i].norm() * dt << " rad in one step at step " << steps_ + 1 << " (t = " << time_ + dt
+        << " ps): the run is unstable; dt = " << dt_ << " ps against a critical step of "
+        << dt_critical_
+        << " ps - lower dt, or check for deeply overlapping elements or runaway loads";
+      throw NumericalError(m.str(), steps_ + 1, runaway);
+    }
+
+    time_ += dt;
+    ++steps_;
+    for (auto& u : updaters_) u(*this, time_);
+    compute_forces();
+
+    // 3. Second half kick with the forces at t_{n+1}; the rest of the work and damping books.
+    long bad = -1;
+    ordered_sums(n, partial_sums_, work, diss, [&](long i, double& work, double& diss) {
+      const auto& dof = E.dof[i];
+      for (int k = 0; k < 3; ++k)
+        second_half_kick(dof[k], E.v[i][k], E.f[i][k], E.f_ext[i][k], fd_[i][k],
+                         E.v_prescribed[i][k], E.mass[i], E.inv_mass[i], h, work, diss);
+      if (E.is_isotropic(i)) {
+        const double I = E.inertia[i].x(), iI = 1.0 / I;
+        for (int k = 0; k < 3; ++k)
+          second_half_kick(dof[k + 3], E.w[i][k], E.t[i][k], E.t_ext[i][k], td_[i][k],
+                           E.w_prescribed[i][k], I, iI, h, work, diss);
+      } else {
+        work += E.t_ext[i].dot(E.w[i]) * h;
+        kick_anisotropic(E.q[i], E.inertia[i], E.w[i], E.t[i] + E.t_ext[i] + td_[i], h);
+        diss -= td_[i].dot(E.w[i]) * h;
+      }
+      if (!E.v[i].allFinite() || !E.w[i].allFinite()) {
+#pragma omp critical(mdem_system_bad_velocity)
+        bad = std::max(bad, i);
+      }
+    });
+    if (bad >= 0) check_finite_forces();  // names the element and the cause
+    if (bad >= 0)
+      throw NumericalError("non-finite velocity of " + describe(E, static_cast<std::size_t>(bad)) +
+                               " at step " + std::to_string(steps_),
+                           steps_, bad);
+
+    ledger_.external_work += work;
+    // Damping, plus the stored energy the models released for good in this step's evaluation
+    // (plastic flow, bonds breaking). Only evaluations inside run() count: initialize() resets
+    // the books, and refresh() follows edits the ledger cannot account for.
+    ledger_.dissipated += diss + ledger_.potential.released;
+    update_kinetic();
+    if (steps_ % settings_.guard_every == 0) check_energy_growth();
+  }
+}
+
+void System::update_energy_scale() {
+  // The energy legitimately in play: initial kinetic energy, work put in, energy dissipated, and
+  // stored energy released. Not the current kinetic or stored energy, which an instability grows.
+  const EnergyLedger& L = ledger_;
+  energy_scale_ = std::max({energy_scale_, initial_kinetic_, std::abs(L.external_work),
+                            std::abs(L.dissipated), initial_stored_ - L.potential.total_stored()});
+}
+
+void System::check_energy_growth() {
+  const EnergyLedger& L = ledger_;
+  update_energy_scale();
+  if (!std::isfinite(L.total()) || !std::isfinite(L.external_work) ||
+      !std::isfinite(L.dissipated)) {
+    check_finite_forces();
+    throw NumericalError("energy became non-finite at step " + std::to_string(steps_), steps_, -1);
+  }
+  // Unexplained growth: the system holds more energy than external work put in.
+  const double growth = -L.balance_residual();
+  const double floor = 1e-4 * static_cast<double>(el_.size());  // eV, ~1 K per element
+  const double limit = settings_.guard_energy_tolerance * std::max(energy_scale_, floor);
+  if (growth > limit) {
+    // Blame the element with the largest kinetic energy: that is where an instability shows.
+    std::size_t worst = 0;
+    double ke_max = -1;
+    for (std::size_t i = 0; i < el_.size(); ++i) {
+      const double ke = el_.mass[i] * el_.v[i].squaredNorm();
+      if (ke > ke_max) {
+        ke_max = ke;
+        worst = i;
+      }
+    }
+    std::ostringstream m;
+    m << "energy grew by " << growth << " eV more than external work explains at step " << steps_
+      << " (t = " << time_ << " ps; tolerance " << limit << " eV); fastest is "
+      << describe(el_, worst) << ": the integration is unstable - lower dt (now " << dt_
+      << " ps, critical " << dt_critical_ << " ps) or check for deeply overlapping elements";
+    throw NumericalError(m.str(), steps_, static_cast<long>(worst));
+  }
+}
+
+double System::energy_balance_error() const {
+  const EnergyLedger& L = ledger_;
+  const double scale =
+      std::max({energy_scale_, initial_kinetic_, std::abs(L.external_work), std::abs(L.dissipated),
+                initial_stored_ - L.potential.total_stored(), 1e-300});
+  return std::abs(L.balance_residual()) / scale;
+}
+
+}  // namespace mdem

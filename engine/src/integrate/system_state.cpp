@@ -1,0 +1,173 @@
+// System checkpoints (System::save_state / load_state).
+#include <cstring>
+
+#include "mdem/integrate/system.h"
+#include "mdem/io/state_io.h"
+
+namespace mdem {
+
+namespace {
+
+// Element properties no run changes: a checkpoint must hold the same ones as the job it is loaded
+// into, which catches a checkpoint of another scene of the same size.
+template <class T>
+void expect_same(StateReader& r, const std::vector<T>& have, std::string_view field) {
+  std::vector<T> saved;
+  r.get(saved, field, have.size());
+  if (!saved.empty() && std::memcmp(saved.data(), have.data(), saved.size() * sizeof(T)) != 0)
+    r.fail(field, "differs from this job's elements (the checkpoint is of another scene)");
+}
+
+void save_elements(StateWriter& w, const Elements& el) {
+  w.begin("elements");
+  w.put(static_cast<std::uint64_t>(el.size()));
+  // State, loads and DOF modes (protocols change these), forces of the last evaluation.
+  w.put(el.x);
+  w.put(el.q);
+  w.put(el.v);
+  w.put(el.w);
+  w.put(el.dof);
+  w.put(el.v_prescribed);
+  w.put(el.w_prescribed);
+  w.put(el.f_ext);
+  w.put(el.t_ext);
+  w.put(el.f);
+  w.put(el.t);
+  // Properties, to check against the job's.
+  w.put(el.mass);
+  w.put(el.inv_mass);
+  w.put(el.inertia);
+  w.put(el.radius);
+  w.put(el.kind);
+  w.put(el.tube);
+  w.put(el.index);
+}
+
+void load_elements(StateReader& r, Elements& el) {
+  r.begin("elements");
+  const std::size_t n = el.size();
+  const auto saved_n = r.get<std::uint64_t>("element count");
+  if (saved_n != n)
+    r.fail({}, "checkpoint holds " + std::to_string(saved_n) + " elements, this job builds " +
+                   std::to_string(n));
+  r.get(el.x, "x", n);
+  r.get(el.q, "q", n);
+  r.get(el.v, "v", n);
+  r.get(el.w, "w", n);
+  r.get(el.dof, "dof", n);
+  for (const auto& d : el.dof)
+    for (DofMode m : d)
+      if (static_cast<int>(m) > static_cast<int>(DofMode::Prescribed))
+        r.fail("dof", "holds an unknown DOF mode " + std::to_string(static_cast<int>(m)));
+  r.get(el.v_prescribed, "v_prescribed", n);
+  r.get(el.w_prescribed, "w_prescribed", n);
+  r.get(el.f_ext, "f_ext", n);
+  r.get(el.t_ext, "t_ext", n);
+  r.get(el.f, "f", n);
+  r.get(el.t, "t", n);
+  expect_same(r, el.mass, "mass");
+  expect_same(r, el.inv_mass, "inv_mass");
+  expect_same(r, el.inertia, "inertia");
+  expect_same(r, el.radius, "radius");
+  expect_same(r, el.kind, "kind");
+  expect_same(r, el.tube, "tube");
+  expect_same(r, el.index, "index");
+}
+
+void save_ledger(StateWriter& w, const EnergyLedger& L) {
+  w.begin("energy");
+  w.put(L.potential.stored);
+  w.put(L.kinetic_translational);
+  w.put(L.kinetic_rotational);
+  w.put(L.external_work);
+  w.put(L.dissipated);
+  w.put(L.initial_total);
+}
+
+void load_ledger(StateReader& r, EnergyLedger& L) {
+  r.begin("energy");
+  L.potential.stored = r.get<decltype(L.potential.stored)>("potential");
+  // What the last evaluation released was booked into `dissipated` then; it is not state.
+  L.potential.released = 0;
+  L.kinetic_translational = r.get<double>("kinetic_translational");
+  L.kinetic_rotational = r.get<double>("kinetic_rotational");
+  L.external_work = r.get<double>("external_work");
+  L.dissipated = r.get<double>("dissipated");
+  L.initial_total = r.get<double>("initial_total");
+}
+
+}  // namespace
+
+void System::save_state(StateWriter& w) const {
+  if (!initialized_)
+    throw CheckpointError(
+        "cannot checkpoint a system that was never initialized (forces, "
+        "energies and dt are not defined yet)");
+  w.begin("system");
+  w.put(threads_);
+  w.put(time_);
+  w.put(dt_);
+  w.put(dt_critical_);
+  w.put(steps_);
+  w.put(energy_scale_);
+  w.put(initial_kinetic_);
+  w.put(initial_stored_);
+  save_elements(w, el_);
+  save_ledger(w, ledger_);
+  w.begin("damping");
+  // The *_prev_ arrays are empty today; saved so that bookkeeping using them resumes too.
+  for (const auto* a : {&fd_, &td_, &f_prev_, &t_prev_, &fext_prev_, &text_prev_}) w.put(*a);
+  w.put(nlist_ != nullptr);
+  if (nlist_) nlist_->save_state(w);
+  w.begin("models");
+  w.put(static_cast<std::uint64_t>(models_.size()));
+  for (const auto& m : models_) {
+    w.begin(m->name());
+    m->save_state(w);
+  }
+}
+
+void System::load_state(StateReader& r) {
+  // Sizes the sinks and damping buffers, creates the neighbour list and checks the settings; the
+  // state it computes is then overwritten.
+  initialize();
+  r.begin("system");
+  const int threads = r.get<int>("threads");
+  if (threads != threads_)
+    r.fail("threads", "checkpoint was written running " + std::to_string(threads) +
+                          " threads, this system runs " + std::to_string(threads_) +
+                          ": a bit-identical resume needs the same thread count");
+  time_ = r.get<double>("time");
+  dt_ = r.get<double>("dt");
+  dt_critical_ = r.get<double>("dt_critical");
+  steps_ = r.get<long>("steps");
+  energy_scale_ = r.get<double>("energy_scale");
+  initial_kinetic_ = r.get<double>("initial_kinetic");
+  initial_stored_ = r.get<double>("initial_stored");
+  load_elements(r, el_);
+  load_ledger(r, ledger_);
+
+  r.begin("damping");
+  const std::size_t n = el_.size();
+  r.get(fd_, "fd", n);
+  r.get(td_, "td", n);
+  for (auto* a : {&f_prev_, &t_prev_, &fext_prev_, &text_prev_}) r.get(*a, "work bookkeeping");
+  const bool has_list = r.get_bool("has neighbour list");
+  if (has_list != (nlist_ != nullptr))
+    r.fail("has neighbour list", has_list ? "checkpoint has a neighbour list, this job has none"
+                                          : "checkpoint has no neighbour list, this job needs one");
+  if (nlist_) nlist_->load_state(r, n);
+
+  r.begin("models");
+  const auto n_models = r.get<std::uint64_t>("model count");
+  if (n_models != models_.size())
+    r.fail("model count", "checkpoint has " + std::to_string(n_models) + " force models, this " +
+                              "job has " + std::to_string(models_.size()));
+  for (const auto& m : models_) {
+    r.begin(m->name());
+    m->load_state(r);
+  }
+  initialized_ = true;
+}
+
+}  // namespace mdem

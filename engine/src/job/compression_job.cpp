@@ -1,0 +1,320 @@
+// The compression job (compression_job.h, scenes.md compression, thesis Ch. 6).
+#include "mdem/job/compression_job.h"
+
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "mdem/core/units.h"
+#include "mdem/force/contact/linear_contact.h"
+#include "mdem/force/wall/planar_wall.h"
+
+namespace mdem {
+namespace {
+
+// Checks what the packing and the protocol do not, before the (possibly long) packing runs.
+const CompressionJobSpec& validated(const CompressionJobSpec& s) {
+  (void)CompressionProtocol(s.loading, 0, 1);  // speed, peak_displacement
+  if (std::isfinite(s.particle.r_outer) && s.loading.peak_displacement >= 2.0 * s.particle.r_outer)
+    throw std::invalid_argument(
+        "compression loading peak_displacement must be below the particle's diameter " +
+        std::to_string(2.0 * s.particle.r_outer) + " nm, got " +
+        std::to_string(s.loading.peak_displacement));
+  if (!std::isfinite(s.viscous_ratio) || s.viscous_ratio < 0 || s.viscous_ratio > 10)
+    throw std::invalid_argument("compression viscous_ratio must be in [0, 10], got " +
+                                std::to_string(s.viscous_ratio));
+  GrainBondParams bp = s.bond;
+  bp.material = s.particle.material;
+  GrainBond check(bp);  // bond behaviour and strength
+  return s;
+}
+
+PackingSpec packing_spec(const CompressionJobSpec& s, const IntegratorSettings& st) {
+  PackingSpec p = s.particle;
+  if (p.threads == 0) p.threads = st.threads;  // the run's thread count packs it too
+  return p;
+}
+
+// The packed grains, then the top and bottom platens just touching the particle's z extremes.
+Elements with_platens(const PackedParticle& packed, const PackingSpec& p) {
+  Elements el = packed.grains;
+  double top = -std::numeric_limits<double>::infinity();
+  double bottom = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < el.size(); ++i) {
+    top = std::max(top, el.x[i].z() + el.radius[i]);
+    bottom = std::min(bottom, el.x[i].z() - el.radius[i]);
+  }
+  // A platen's mass only enters the kinetic energy of its prescribed motion: that of the largest
+  // grain keeps it negligible next to the work done.
+  const double mass =
+      p.material.density * 4.0 / 3.0 * std::numbers::pi * std::pow(p.grain_r_max, 3);
+  add_platen(el, Vec3(0, 0, top), Vec3(0, 0, -1), mass, p.r_outer);
+  add_platen(el, Vec3(0, 0, bottom), Vec3(0, 0, 1), mass, p.r_outer);
+  return el;
+}
+
+}  // namespace
+
+CompressionJob::CompressionJob(const CompressionJobSpec& spec, IntegratorSettings settings)
+    : CompressionJob(pack_grains(packing_spec(validated(spec), settings)), spec, settings) {}
+
+CompressionJob::CompressionJob(PackedParticle packed, const CompressionJobSpec& spec,
+                               IntegratorSettings settings)
+    : packed_(std::move(packed)), sys_(with_platens(packed_, spec.particle), settings) {
+  validated(spec);
+  const PackingSpec& p = spec.particle;
+  n_grains_ = packed_.grains.size();
+  top_ = n_grains_;
+  bottom_ = n_grains_ + 1;
+  const Elements& el = sys_.elements();
+  z_top0_ = el.x[top_].z();
+  z_bottom0_ = el.x[bottom_].z();
+  height0_ = z_top0_ - z_bottom0_;
+  x0_ = el.x;
+
+  GrainBondParams bp = spec.bond;
+  bp.material = p.material;
+  auto bonds = std::make_unique<GrainBond>(bp);
+  for (const auto& [i, j] : packed_.touching) bonds->add(el, i, j);
+  bonds_ = sys_.add(std::move(bonds));
+  initial_bonds_ = bonds_->bonds().size();
+  sys_.add(std::make_unique<LinearContact>(p.material.youngs, p.grain_r_max, bonds_));
+  sys_.add(std::make_unique<PlanarWallContact>(p.material.youngs));
+  if (spec.viscous_ratio > 0)
+    sys_.add(std::make_unique<GrainDashpots>(spec.viscous_ratio, bonds_, p.material.youngs,
+                                             p.grain_r_max));
+
+  // Slip reference: each grain's bonded neighbours at the start of loading.
+  std::vector<std::uint32_t> count(n_grains_ + 1, 0);
+  for (const GrainBondRecord& b : bonds_->bonds()) {
+    ++count[b.bond.i + 1];
+    ++count[b.bond.j + 1];
+  }
+  for (std::size_t i = 0; i < n_grains_; ++i) count[i + 1] += count[i];
+  slip_offsets_ = count;
+  slip_partners_.resize(count.back());
+  std::vector<std::uint32_t> fill(count.begin(), count.end() - 1);
+  for (const GrainBondRecord& b : bonds_->bonds()) {
+    slip_partners_[fill[b.bond.i]++] = b.bond.j;
+    slip_partners_[fill[b.bond.j]++] = b.bond.i;
+  }
+
+  protocol_ = std::make_shared<CompressionProtocol>(spec.loading, top_, bottom_);
+  auto protocol = protocol_;
+  sys_.add_updater([protocol](System& s, double t) { (*protocol)(s, t); });
+  sys_.add_updater([this](System&, double) { track(); });
+}
+
+double CompressionJob::duration() const { return protocol_->duration(); }
+
+std::string CompressionJob::phase() const { return protocol_->phase(sys_.time()); }
+
+std::vector<EnergyTerm> CompressionJob::energy_terms() {
+  return {EnergyTerm::BondTension, EnergyTerm::BondShear, EnergyTerm::BondBending,
+          EnergyTerm::BondTorsion, EnergyTerm::Contact};
+}
+
+double CompressionJob::platen_force_nN() const {
+  const Elements& el = sys_.elements();
+  const auto& fd = sys_.damping_forces();
+  auto fz = [&](std::size_t p) { return el.f[p].z() + (p < fd.size() ? fd[p].z() : 0.0); };
+  return units::to_nN(0.5 * (fz(top_) - fz(bottom_)));
+}
+
+double CompressionJob::displacement() const {
+  const Elements& el = sys_.elements();
+  return (z_top0_ - el.x[top_].z()) + (el.x[bottom_].z() - z_bottom0_);
+}
+
+double CompressionJob::height() const {
+  const Elements& el = sys_.elements();
+  double top = -std::numeric_limits<double>::infinity();
+  double bottom = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < n_grains_; ++i) {
+    top = std::max(top, el.x[i].z() + el.radius[i]);
+    bottom = std::min(bottom, el.x[i].z() - el.radius[i]);
+  }
+  return top - bottom;
+}
+
+void CompressionJob::track() {
+  // Called before each force evaluation: the forces in the system are those of the previous
+  // evaluation, made at the displacement recorded at the previous call.
+  if (have_prev_) {
+    const double F = platen_force_nN();
+    if (F > peak_force_) {
+      peak_force_ = F;
+      peak_at_ = prev_disp_;
+    }
+    if (prev_loading_ && prev_disp_ <= 0.5 * protocol_->params().peak_displacement) {
+      sum_fh_ += F * prev_disp_;
+      sum_hh_ += prev_disp_ * prev_disp_;
+    }
+  }
+  prev_disp_ = displacement();
+  prev_loading_ = protocol_->loading(sys_.time());
+  have_prev_ = true;
+}
+
+Mat3 CompressionJob::rigid_rotation() const {
+  // Kabsch: the rotation R minimising Σ |(x_i − c) − R (X_i − C)|² over the bonded grains.
+  const Elements& el = sys_.elements();
+  Vec3 c = Vec3::Zero(), c0 = Vec3::Zero();
+  long n = 0;
+  for (std::size_t i = 0; i < n_grains_; ++i)
+    if (slip_offsets_[i + 1] > slip_offsets_[i]) {
+      c += el.x[i];
+      c0 += x0_[i];
+      ++n;
+    }
+  if (n < 3) return Mat3::Identity();
+  c /= static_cast<double>(n);
+  c0 /= static_cast<double>(n);
+  Mat3 H = Mat3::Zero();
+  for (std::size_t i = 0; i < n_grains_; ++i)
+    if (slip_offsets_[i + 1] > slip_offsets_[i]) H += (x0_[i] - c0) * (el.x[i] - c).transpose();
+  const Eigen::JacobiSVD<Mat3> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Mat3 D = Mat3::Identity();
+  D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+  return svd.matrixV() * D * svd.matrixU().transpose();
+}
+
+std::vector<double> CompressionJob::slip() const {
+  const Elements& el = sys_.elements();
+  const Mat3 R = rigid_rotation();
+  std::vector<double> s(el.size(), 0.0);
+  for (std::size_t i = 0; i < n_grains_; ++i) {
+    const std::uint32_t b = slip_offsets_[i], e = slip_offsets_[i + 1];
+    if (b == e) continue;
+    double sum = 0;
+    for (std::uint32_t k = b; k < e; ++k) {
+      const std::uint32_t j = slip_partners_[k];
+      sum += ((el.x[j] - el.x[i]) - R * (x0_[j] - x0_[i])).norm();
+    }
+    s[i] = sum / static_cast<double>(e - b);
+  }
+  return s;
+}
+
+long CompressionJob::fragments() const {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
+  edges.reserve(bonds_->bonds().size());
+  for (const GrainBondRecord& b : bonds_->bonds())
+    if (!b.broken) edges.emplace_back(b.bond.i, b.bond.j);
+  // Grains never bonded (rattlers) are isolated vertices, not fragments.
+  long never_bonded = 0;
+  for (std::size_t i = 0; i < n_grains_; ++i)
+    never_bonded += slip_offsets_[i + 1] == slip_offsets_[i];
+  return connected_components(n_grains_, edges) - never_bonded;
+}
+
+std::vector<std::string> CompressionJob::columns() const {
+  std::vector<std::string> c = {"time_ps",      "displacement_nm", "force_nN",
+                                "bonds_intact", "bonds_yielded",   "bonds_broken",
+                                "fragments",    "slip_max_nm",     "slip_mean_nm"};
+  for (std::string& e : energy_columns(energy_terms())) c.push_back(std::move(e));
+  return c;
+}
+
+namespace {
+struct SlipFigures {
+  double max = 0, mean = 0;
+};
+SlipFigures slip_figures(const std::vector<double>& s, const std::vector<std::uint32_t>& offsets) {
+  SlipFigures f;
+  long n = 0;
+  for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
+    if (offsets[i] == offsets[i + 1]) continue;  // unbonded grains have no slip
+    f.max = std::max(f.max, s[i]);
+    f.mean += s[i];
+    ++n;
+  }
+  if (n) f.mean /= static_cast<double>(n);
+  return f;
+}
+}  // namespace
+
+std::vector<double> CompressionJob::observe() {
+  const SlipFigures sf = slip_figures(slip(), slip_offsets_);
+  std::vector<double> v = {sys_.time(),
+                           displacement(),
+                           platen_force_nN(),
+                           static_cast<double>(bonds_->intact_count()),
+                           static_cast<double>(bonds_->yielded_count()),
+                           static_cast<double>(bonds_->broken_count()),
+                           static_cast<double>(fragments()),
+                           sf.max,
+                           sf.mean};
+  for (double e : energy_values(sys_, energy_terms())) v.push_back(e);
+  return v;
+}
+
+void CompressionJob::decorate(Snapshot& s) const { s.scalars.emplace_back("slip_nm", slip()); }
+
+Summary CompressionJob::summary() {
+  // The peak includes the current state (the tracker lags one evaluation behind).
+  const double force = platen_force_nN(), disp = displacement();
+  double peak = peak_force_, peak_at = peak_at_;
+  if (force > peak) {
+    peak = force;
+    peak_at = disp;
+  }
+  const SlipFigures sf = slip_figures(slip(), slip_offsets_);
+  return {{"grains", static_cast<long>(n_grains_)},
+          {"bonds", static_cast<long>(initial_bonds_)},
+          {"rattlers", packed_.rattlers},
+          {"porosity", packed_.porosity},
+          {"porosity_error", packed_.porosity_error},
+          {"packing_steps", packed_.steps},
+          {"packing_unbalanced_ratio", packed_.unbalanced_ratio},
+          {"packing_wall_shift_nm", packed_.wall_shift},
+          {"peak_force_nN", peak},
+          {"peak_force_displacement_nm", peak_at},
+          {"loading_stiffness_nN_per_nm", sum_hh_ > 0 ? sum_fh_ / sum_hh_ : 0.0},
+          {"final_force_nN", force},
+          {"final_displacement_nm", disp},
+          {"residual_height_loss_nm", height0_ - height()},
+          {"bonds_intact", static_cast<long>(bonds_->intact_count())},
+          {"bonds_yielded", static_cast<long>(bonds_->yielded_count())},
+          {"bonds_broken", static_cast<long>(bonds_->broken_count())},
+          {"fragments", fragments()},
+          {"slip_max_nm", sf.max},
+          {"slip_mean_nm", sf.mean},
+          {"energy_balance_error", sys_.energy_balance_error()},
+          {"dt_ps", sys_.dt()},
+          {"critical_dt_ps", sys_.critical_dt()},
+          {"simulated_ps", sys_.time()}};
+}
+
+void CompressionJob::save_state(StateWriter& w) const {
+  sys_.save_state(w);
+  w.begin("compression");
+  w.put(peak_force_);
+  w.put(peak_at_);
+  w.put(prev_disp_);
+  w.put(have_prev_);
+  w.put(prev_loading_);
+  w.put(sum_fh_);
+  w.put(sum_hh_);
+}
+
+void CompressionJob::load_state(StateReader& r) {
+  // The system's load initializes it, which runs the updaters (the tracker too): its state is
+  // loaded after, overwriting what that changed.
+  sys_.load_state(r);
+  r.begin("compression");
+  peak_force_ = r.get<double>("peak_force");
+  peak_at_ = r.get<double>("peak_at");
+  prev_disp_ = r.get<double>("prev_disp");
+  have_prev_ = r.get_bool("have_prev");
+  prev_loading_ = r.get_bool("prev_loading");
+  sum_fh_ = r.get<double>("sum_fh");
+  sum_hh_ = r.get<double>("sum_hh");
+}
+
+}  // namespace mdem

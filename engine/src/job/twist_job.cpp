@@ -1,0 +1,154 @@
+#include "mdem/job/twist_job.h"
+
+#include <cmath>
+#include <numbers>
+
+#include "mdem/core/cnt.h"
+#include "mdem/core/units.h"
+#include "mdem/force/bond/parallel_bond.h"
+#include "mdem/force/contact/anisotropic_vdw.h"
+#include "mdem/force/damping/viscous_contact_damping.h"
+#include "mdem/scene/bundle_scene.h"
+
+namespace mdem {
+namespace {
+
+System build_system(const TwistJobSpec& spec, IntegratorSettings settings, Rope& rope) {
+  Elements el;
+  auto bonds = std::make_unique<ParallelBond>();
+  rope = build_hex_rope(el, bonds.get(), spec.rope);
+  if (spec.temperature_k > 0) {
+    // Equipartition: ½ m <v_k²> = ½ kB T per component, likewise for the spins.
+    const double kT = units::kBoltzmann * spec.temperature_k;
+    randomize_motion(el, std::sqrt(kT / cnt::kMass), std::sqrt(kT / cnt::kInertia), spec.seed);
+  }
+  System sys(std::move(el), settings);
+  sys.add(std::move(bonds));
+  sys.add(std::make_unique<AnisotropicVdw>());
+  if (spec.vdw_damping_ratio > 0) {
+    ContactDampingParams d;
+    d.ratio = spec.vdw_damping_ratio;
+    sys.add(std::make_unique<ViscousContactDamping>(d));
+  }
+  return sys;
+}
+
+}  // namespace
+
+TwistJob::TwistJob(const TwistJobSpec& spec, IntegratorSettings settings)
+    : sys_(build_system(spec, settings, rope_)) {
+  protocol_ = std::make_shared<TwistProtocol>(spec.loading, rope_.grip_a, rope_.grip_b);
+  shift_ = std::make_shared<ShiftAngle>(sys_.elements(), rope_);
+  auto protocol = protocol_;
+  sys_.add_updater([protocol](System& s, double t) { protocol->apply(s, t); });
+  // The shift angle is unwrapped from samples less than a half turn apart: sample every 10 steps,
+  // counted by the system (not the updater) so a job restored from a checkpoint samples at the
+  // same steps.
+  auto shift = shift_;
+  const Rope* rope = &rope_;
+  double* angle = &shift_angle_;
+  sys_.add_updater([shift, rope, angle](System& s, double) {
+    if (s.steps() % 10 == 0) *angle = shift->update(s.elements(), rope_axis(s.elements(), *rope));
+  });
+}
+
+void TwistJob::save_state(StateWriter& w) const {
+  sys_.save_state(w);
+  protocol_->save_state(w);
+  shift_->save_state(w);
+  w.begin("twist_report");
+  w.put(shift_angle_);
+  w.put(max_charge_);
+  w.put(peak_twist_);
+  w.put(peak_shift_);
+}
+
+void TwistJob::load_state(StateReader& r) {
+  // The system's load initializes it, which runs the updaters at the state as built: the
+  // protocol's and the shift angle's state are loaded after it, overwriting what that changed.
+  sys_.load_state(r);
+  protocol_->load_state(r);
+  shift_->load_state(r);
+  r.begin("twist_report");
+  shift_angle_ = r.get<double>("shift_angle");
+  max_charge_ = r.get<int>("max_charge");
+  peak_twist_ = r.get<double>("peak_twist");
+  peak_shift_ = r.get<double>("peak_shift");
+}
+
+std::vector<EnergyTerm> TwistJob::energy_terms() {
+  return {EnergyTerm::BondTension, EnergyTerm::BondShear, EnergyTerm::BondBending,
+          EnergyTerm::BondTorsion, EnergyTerm::Vdw};
+}
+
+std::string TwistJob::phase() const {
+  return std::string(twist_phase_name(protocol_->phase_at(sys_.time())));
+}
+
+TwistReport TwistJob::report() {
+  const Elements& el = sys_.elements();
+  const RopeAxis axis = rope_axis(el, rope_);
+  shift_angle_ = shift_->update(el, axis);
+  const RopeShape shape = rope_shape(el, rope_, axis);
+  TwistReport r;
+  r.applied_torque_nNnm = units::to_nNnm(protocol_->torque_at(sys_.time()));
+  r.grip_reaction_nNnm = units::to_nNnm(0.5 * (grip_reaction_moment(el, rope_.grip_a, axis.dir) -
+                                               grip_reaction_moment(el, rope_.grip_b, axis.dir)));
+  r.twist_angle_deg = shape.twist_angle_deg;
+  r.shift_angle_deg = shift_angle_ * 180.0 / std::numbers::pi;
+  r.rope_radius_nm = shape.radius;
+  r.length_nm = axis.length;
+  r.core_void_nm = shape.core_void_radius;
+  r.axis_deviation_nm = shape.axis_deviation;
+  r.clusters = shape.clusters;
+  r.topological_charge = rope_topological_charge(el, rope_, axis).charge;
+  r.morphology = classify_morphology(shape, rope_);
+  max_charge_ = std::max(max_charge_, r.topological_charge);
+  peak_twist_ = std::max(peak_twist_, r.twist_angle_deg);
+  peak_shift_ = std::max(peak_shift_, std::abs(r.shift_angle_deg));
+  return r;
+}
+
+std::vector<std::string> TwistJob::columns() const {
+  std::vector<std::string> c = energy_columns(energy_terms());
+  for (const char* n : {"applied_torque_nNnm", "grip_reaction_nNnm", "twist_angle_deg",
+                        "shift_angle_deg", "rope_radius_nm", "length_nm", "core_void_nm",
+                        "axis_deviation_nm", "clusters", "topological_charge", "morphology_code"})
+    c.emplace_back(n);
+  return c;
+}
+
+std::vector<double> TwistJob::observe() {
+  std::vector<double> v = energy_values(sys_, energy_terms());
+  const TwistReport r = report();
+  v.insert(v.end(),
+           {r.applied_torque_nNnm, r.grip_reaction_nNnm, r.twist_angle_deg, r.shift_angle_deg,
+            r.rope_radius_nm, r.length_nm, r.core_void_nm, r.axis_deviation_nm,
+            static_cast<double>(r.clusters), static_cast<double>(r.topological_charge),
+            static_cast<double>(static_cast<int>(r.morphology))});
+  return v;
+}
+
+Summary TwistJob::summary() {
+  const TwistReport r = report();
+  return {{"morphology", std::string(morphology_name(r.morphology))},
+          {"twist_angle_deg", r.twist_angle_deg},
+          {"shift_angle_deg", r.shift_angle_deg},
+          {"topological_charge", static_cast<long>(r.topological_charge)},
+          {"max_topological_charge", static_cast<long>(max_charge_)},
+          {"peak_twist_angle_deg", peak_twist_},
+          {"peak_shift_angle_deg", peak_shift_},
+          {"rope_radius_nm", r.rope_radius_nm},
+          {"initial_rope_radius_nm", rope_.initial_radius},
+          {"length_nm", r.length_nm},
+          {"core_void_nm", r.core_void_nm},
+          {"axis_deviation_nm", r.axis_deviation_nm},
+          {"applied_torque_nNnm", r.applied_torque_nNnm},
+          {"grip_reaction_nNnm", r.grip_reaction_nNnm},
+          {"tubes", static_cast<long>(rope_.tubes.size())},
+          {"elements", static_cast<long>(sys_.elements().size())},
+          {"spacing_nm", rope_.lattice.spacing},
+          {"simulated_ps", sys_.time()}};
+}
+
+}  // namespace mdem
