@@ -7,6 +7,9 @@
 #include <iostream>
 #include <sstream>
 
+#include "mdem/job_kinds.h"
+#include "mdem/job_state.h"
+
 namespace mdem::cli {
 namespace {
 
@@ -88,25 +91,6 @@ std::optional<T> get(const json& j, const char* key) {
   return std::nullopt;
 }
 
-// A JSON scalar as `mdem run` prints it: text bare, integers as integers, other numbers as
-// the stream formats a double.
-struct Scalar {
-  const json& j;
-};
-std::ostream& operator<<(std::ostream& os, Scalar s) {
-  if (s.j.is_string()) return os << s.j.get<std::string>();
-  if (s.j.is_number_integer()) return os << s.j.get<long>();
-  if (s.j.is_number()) return os << s.j.get<double>();
-  return os << s.j.dump();
-}
-Scalar scalar(const json& j) { return Scalar{j}; }
-
-bool has_all(const json& j, std::initializer_list<const char*> keys) {
-  for (const char* k : keys)
-    if (!j.is_object() || !j.contains(k)) return false;
-  return true;
-}
-
 }  // namespace
 
 void print_report(std::ostream& out, std::ostream& err, const json& doc,
@@ -120,46 +104,22 @@ void print_report(std::ostream& out, std::ostream& err, const json& doc,
   const json perf = doc.is_object() && doc.contains("performance") ? doc["performance"] : json();
   if (!time_ps) time_ps = get<double>(summary, "simulated_ps");
 
-  if (state == "FAILED") err << kind << " " << id << ": FAILED: " << reason << "\n";
+  const std::optional<JobState> st = parse_job_state(state);
+  const bool failed = st == v1::FAILED;
+  if (failed) err << kind << " " << id << ": FAILED: " << reason << "\n";
   out << kind << " " << id << ": " << state;
   if (const auto steps = get<long>(perf, "steps")) {
     out << " after " << *steps << " steps";
     if (time_ps) out << " (" << *time_ps << " ps)";
   }
   out << "\n";
-  if (state == "CANCELLED" && !reason.empty()) out << "  " << reason << "\n";
-  if (state != "FAILED") {
-    const json& s = summary;
-    if (has_all(s, {"morphology", "twist_angle_deg", "shift_angle_deg", "topological_charge",
-                    "max_topological_charge", "rope_radius_nm", "initial_rope_radius_nm",
-                    "length_nm", "applied_torque_nNnm", "grip_reaction_nNnm"})) {
-      out << "  morphology " << scalar(s["morphology"]) << ", twist angle "
-          << scalar(s["twist_angle_deg"]) << " deg, end shift " << scalar(s["shift_angle_deg"])
-          << " deg\n"
-          << "  topological charge Q = " << scalar(s["topological_charge"]) << " (max "
-          << scalar(s["max_topological_charge"]) << "), rope radius " << scalar(s["rope_radius_nm"])
-          << " nm (initial " << scalar(s["initial_rope_radius_nm"]) << "), length "
-          << scalar(s["length_nm"]) << " nm\n"
-          << "  grip torque " << scalar(s["applied_torque_nNnm"]) << " nN·nm applied, "
-          << scalar(s["grip_reaction_nNnm"]) << " nN·nm reaction\n";
-    } else if (has_all(s, {"grains", "bonds", "porosity", "peak_force_nN",
-                           "peak_force_displacement_nm", "loading_stiffness_nN_per_nm",
-                           "final_force_nN", "final_displacement_nm", "bonds_yielded",
-                           "bonds_broken", "fragments", "slip_max_nm", "slip_mean_nm"})) {
-      out << "  " << scalar(s["grains"]) << " grains, " << scalar(s["bonds"]) << " bonds, porosity "
-          << scalar(s["porosity"]) << "\n"
-          << "  peak force " << scalar(s["peak_force_nN"])
-          << " nN at h = " << scalar(s["peak_force_displacement_nm"]) << " nm, loading stiffness "
-          << scalar(s["loading_stiffness_nN_per_nm"]) << " nN/nm; at the end "
-          << scalar(s["final_force_nN"]) << " nN at h = " << scalar(s["final_displacement_nm"])
-          << " nm\n"
-          << "  bonds yielded " << scalar(s["bonds_yielded"]) << ", broken "
-          << scalar(s["bonds_broken"]) << "; fragments " << scalar(s["fragments"])
-          << "; grain slip max " << scalar(s["slip_max_nm"]) << " nm, mean "
-          << scalar(s["slip_mean_nm"]) << " nm\n";
-    } else if (s.is_object() && !s.empty()) {
-      out << "  summary " << s.dump() << "\n";
-    }
+  if (st == v1::CANCELLED && !reason.empty()) out << "  " << reason << "\n";
+  if (!failed) {
+    // The kind's declared summary layout (jobs/src/<kind>_job_kind.cpp), line by line.
+    if (const SummaryLayout* layout = summary_layout(kind))
+      for (const std::string& line : summary_lines(*layout, summary)) out << "  " << line << "\n";
+    else if (summary.is_object() && !summary.empty())
+      out << "  summary " << summary.dump() << "\n";
     const auto balance = get<double>(acc, "energy_balance_error");
     const auto dt = get<double>(acc, "dt_ps");
     const auto ratio = get<double>(acc, "dt_over_critical");

@@ -7,6 +7,7 @@
 #include "export.h"
 #include "flags.h"
 #include "mdem/cli.h"
+#include "mdem/job_kinds.h"
 #include "plot.h"
 #include "remote.h"
 #include "remote_commands.h"
@@ -193,15 +194,9 @@ std::string highlights(const JobRecord& job) {
   if (spec.is_object() && spec.contains("name")) parts.push_back(scalar_text(spec["name"]));
   json summary = parse_or_text(job.summary_json);
   if (summary.is_object() && summary.contains("summary")) summary = summary["summary"];
-  if (summary.is_object()) {
-    if (summary.contains("morphology"))
-      parts.push_back("morphology " + scalar_text(summary["morphology"]));
-    if (summary.contains("elements"))
-      parts.push_back(scalar_text(summary["elements"]) + " elements");
-    if (summary.contains("grains")) parts.push_back(scalar_text(summary["grains"]) + " grains");
-    if (summary.contains("peak_force_nN"))
-      parts.push_back("peak " + scalar_text(summary["peak_force_nN"]) + " nN");
-  }
+  // The kind's declared highlights (jobs/src/<kind>_job_kind.cpp).
+  if (const SummaryLayout* layout = summary_layout(job.kind))
+    for (std::string& h : summary_highlights(*layout, summary)) parts.push_back(std::move(h));
   if (!job.reason.empty()) parts.push_back(job.reason);
   std::string text;
   for (const std::string& p : parts) text += (text.empty() ? "" : "; ") + p;

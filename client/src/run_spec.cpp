@@ -2,14 +2,13 @@
 // job in this process, from flags and/or a JSON/YAML spec file, with a progress bar on a
 // terminal (plain lines when piped), results in the local database and a summary (text, or one
 // JSON object with --json).
-#include <chrono>
-
 #include "console.h"
 #include "flags.h"
 #include "jobs.h"
 #include "mdem/cli.h"
+#include "mdem/job_runner.h"
+#include "mdem/job_state.h"
 #include "mdem/spec.h"
-#include "mdem/spec_job.h"
 #include "results_store.h"
 #include "spec_flags.h"
 
@@ -57,8 +56,8 @@ int execute(const SpecKind& kind, const Parsed& p, std::ostream& out, std::ostre
   if (!p.json)
     if (const std::string line = kind.building(p.spec); !line.empty())
       err << kind.name << ": " << line << "\n";
-  const std::unique_ptr<Job> built = make_spec_job(p.spec);
-  Job& job = *built;
+  JobRunner runner(p.spec);
+  Job& job = runner.job();
   // A time step above the safe limit is refused here, before anything is stored.
   job.system().initialize();
   ResultsStore store(p.db);
@@ -66,7 +65,7 @@ int execute(const SpecKind& kind, const Parsed& p, std::ostream& out, std::ostre
   rec.id = ResultsStore::new_job_id();
   rec.kind = kind.name;
   rec.spec_json = spec::to_json(p.spec, false);
-  rec.state = "RUNNING";
+  rec.state = job_state_name(v1::RUNNING);
   store.create_job(rec);
   store.set_columns(rec.id, job.columns());
   if (!p.json) err << kind.name << " " << rec.id << ": " << kind.describe(job, p.spec) << "\n";
@@ -86,25 +85,16 @@ int execute(const SpecKind& kind, const Parsed& p, std::ostream& out, std::ostre
   InterruptGuard interrupt;
   obs.cancelled = [] { return InterruptGuard::interrupted(); };
 
-  const auto t0 = std::chrono::steady_clock::now();
-  std::string state = "SUCCEEDED", reason;
-  try {
-    if (run_job(job, job_cadence(p.spec), obs).cancelled) {
-      state = "CANCELLED";
-      reason = "interrupted by the user; results up to t = " + std::to_string(job.system().time()) +
-               " ps are kept";
-    }
-  } catch (const NumericalError& e) {
-    state = "FAILED";
-    reason = e.what();
-  }
+  const JobOutcome outcome = runner.run(obs, [](Job& j) {
+    return "interrupted by the user; results up to t = " + std::to_string(j.system().time()) +
+           " ps are kept";
+  });
   progress.finish();
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!pending.empty()) store.append_frames(rec.id, pending);
 
-  json doc = job_report(job, rec.id, state, reason, wall);
+  json doc = runner.report(rec.id, outcome);
   doc["db"] = store.path();
-  store.finish_job(rec.id, state, reason, doc.dump());
+  store.finish_job(rec.id, job_state_name(outcome.state), outcome.reason, doc.dump());
 
   if (p.json) {
     write_json(out, doc);
@@ -112,7 +102,7 @@ int execute(const SpecKind& kind, const Parsed& p, std::ostream& out, std::ostre
   } else {
     print_report(out, err, doc, job.system().time());
   }
-  return state == "SUCCEEDED" ? kOk : kJobFailed;
+  return outcome.state == v1::SUCCEEDED ? kOk : kJobFailed;
 }
 
 }  // namespace

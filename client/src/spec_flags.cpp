@@ -55,22 +55,14 @@ void apply_common_flags(const FlagValues& f, v1::JobSpec& spec) {
         spec_number("--snapshot-every", val("--snapshot-every")));
 }
 
-const std::vector<SpecKind>& spec_kinds() {
-  static const std::vector<SpecKind> kinds = {twist_kind(), compression_kind()};
+const SpecKindRegistry& spec_kinds() {
+  static const SpecKindRegistry kinds = {twist_kind(), compression_kind()};
   return kinds;
 }
 
-const SpecKind* find_spec_kind(const std::string& name) {
-  for (const SpecKind& k : spec_kinds())
-    if (k.name == name) return &k;
-  return nullptr;
-}
+const SpecKind* find_spec_kind(const std::string& name) { return spec_kinds().find(name); }
 
-std::string spec_kind_names() {
-  std::string names;
-  for (const SpecKind& k : spec_kinds()) names += (names.empty() ? "" : ", ") + k.name;
-  return names;
-}
+std::string spec_kind_names() { return spec_kinds().names(); }
 
 FlagSpec spec_flag_spec(const SpecKind& kind) {
   FlagSpec fs;
@@ -103,7 +95,7 @@ std::string describe_spec_error(const spec::SpecError& e) {
         if (flag.empty() && (f.field == field || f.field.rfind(field + "[", 0) == 0)) flag = fl;
     };
     match(common_flag_fields());
-    for (const SpecKind& k : spec_kinds()) match(k.flag_fields());
+    for (const SpecKind& k : spec_kinds().all()) match(k.flag_fields());
     o << "  " << f.field << (flag.empty() ? "" : " (" + flag + ")") << ": " << f.message << "\n";
   }
   return o.str();
@@ -133,7 +125,7 @@ std::string spec_flags_help(const SpecKind& kind) {
 
 std::string all_spec_flags_help() {
   std::string s = kSpecFileHelp;
-  for (const SpecKind& k : spec_kinds()) s += "\n== " + k.name + " jobs ==\n" + k.flags_help;
+  for (const SpecKind& k : spec_kinds().all()) s += "\n== " + k.name + " jobs ==\n" + k.flags_help;
   return s + "\n" + kRunFlagsHelp;
 }
 

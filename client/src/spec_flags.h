@@ -13,6 +13,7 @@
 
 #include "flags.h"
 #include "mdem/job/job.h"
+#include "mdem/kind_registry.h"
 #include "mdem/spec.h"
 #include "mdem/v1/job.pb.h"
 
@@ -63,7 +64,11 @@ struct SpecKind {
   std::string (*building)(const v1::JobSpec& spec);
 };
 
-const std::vector<SpecKind>& spec_kinds();
+// The client's registry of job kinds: one entry per kind (its flag table, help and lines), one
+// line per kind in spec_kinds() (spec_flags.cpp); the kind's spec rules and job factory are
+// registered in the proto and jobs layers under the same name.
+using SpecKindRegistry = KindRegistry<SpecKind>;
+const SpecKindRegistry& spec_kinds();
 // The kind named `name`, or nullptr.
 const SpecKind* find_spec_kind(const std::string& name);
 // "twist, compression"

@@ -5,75 +5,14 @@
 #include <stdexcept>
 
 #include "mdem/core/units.h"
+#include "mdem/job_kinds.h"
 #include "mdem/spec.h"
 
 namespace mdem {
 
-TwistJobSpec twist_job_spec(const v1::JobSpec& spec) {
-  const v1::TwistSpec& t = spec.twist();
-  TwistJobSpec job;
-  RopeSpec& r = job.rope;
-  r.layers = t.layers();
-  r.segments = std::max(2, static_cast<int>(std::lround(t.length_nm() / 1.356)));
-  r.spacing = t.has_spacing_nm() ? t.spacing_nm() : 0.0;
-  r.missing.assign(t.missing_tubes().begin(), t.missing_tubes().end());
-  for (const v1::LineDefect& d : t.line_defects())
-    r.lines.push_back({d.angle_deg(), d.width(), d.length_fraction()});
-  r.grip_segments = t.grip_segments();
-  TwistLoading& l = job.loading;
-  l.torque_max = units::nNnm(t.torque_nn_nm());
-  l.rate = units::nNnm(t.torque_rate_nn_nm_per_ps());
-  l.hold = t.hold_ps();
-  l.boundary = t.boundary() == v1::TWIST_RELAXATION ? TwistBoundary::TwistRelaxation
-                                                    : TwistBoundary::ConstantMoment;
-  l.grip_load = t.grip_load() == v1::PER_ELEMENT ? GripLoad::PerElement : GripLoad::RigidGrip;
-  l.unload = t.unload();
-  l.unload_hold = t.unload_hold_ps();
-  job.vdw_damping_ratio = t.vdw_damping_ratio();
-  job.temperature_k = t.temperature_k();
-  job.seed = static_cast<unsigned>(spec.seed());
-  return job;
-}
-
-CompressionJobSpec compression_job_spec(const v1::JobSpec& spec) {
-  const v1::CompressionSpec& c = spec.compression();
-  CompressionJobSpec job;
-  PackingSpec& p = job.particle;
-  p.shape = PackingShape::Shell;
-  p.r_outer = c.outer_radius_nm();
-  p.r_inner = c.inner_radius_nm();
-  p.grain_r_min = c.grain_radius_min_nm();
-  p.grain_r_max = c.grain_radius_max_nm();
-  p.target_porosity = c.porosity();
-  p.material.youngs = units::GPa(c.youngs_gpa());
-  p.material.poisson = c.poisson();
-  p.material.density =
-      c.density_g_cm3() * units::kGramPerCm3InAmuPerNm3 * units::kAmu;  // g/cm³ -> internal
-  p.seed = spec.seed();
-  job.bond.material = p.material;
-  switch (c.bond()) {
-    case v1::PLASTIC:
-      job.bond.behaviour = BondBehaviour::Plastic;
-      break;
-    case v1::BRITTLE:
-      job.bond.behaviour = BondBehaviour::Brittle;
-      break;
-    default:
-      job.bond.behaviour = BondBehaviour::Elastic;
-  }
-  // Unused by elastic bonds (a CUSTOM material's elastic bond may have none).
-  job.bond.strength = c.has_strength_gpa() ? units::GPa(c.strength_gpa()) : 0.0;
-  job.loading.speed = c.platen_speed_nm_per_ps();
-  job.loading.peak_displacement = c.peak_displacement_nm();
-  job.loading.unload = c.unload();
-  job.viscous_ratio = c.viscous_ratio();
-  return job;
-}
-
 IntegratorSettings integrator_settings(const v1::JobSpec& spec) {
   IntegratorSettings s;
-  if (spec.has_twist()) s.local_damping = spec.twist().local_damping();
-  if (spec.has_compression()) s.local_damping = spec.compression().local_damping();
+  if (const JobKind* kind = job_kinds().of(spec)) s.local_damping = kind->local_damping(spec);
   if (spec.run().has_dt_ps()) s.dt = spec.run().dt_ps();
   s.safety = spec.run().safety();
   s.threads = spec.run().threads();
@@ -88,54 +27,37 @@ JobCadence job_cadence(const v1::JobSpec& spec) {
 }
 
 std::string_view job_kind_name(const v1::JobSpec& spec) {
-  switch (spec.kind_case()) {
-    case v1::JobSpec::kTwist:
-      return "twist";
-    case v1::JobSpec::kCompression:
-      return "compression";
-    default:
-      return "";
-  }
+  const JobKind* kind = job_kinds().of(spec);
+  return kind ? std::string_view(kind->name) : std::string_view();
 }
 
 bool builds_quickly(const v1::JobSpec& spec) {
-  return spec.kind_case() != v1::JobSpec::kCompression;
+  const JobKind* kind = job_kinds().of(spec);
+  return !kind || kind->builds_quickly;
 }
 
 long element_bound(const v1::JobSpec& spec) {
-  switch (spec.kind_case()) {
-    case v1::JobSpec::kTwist:
-      return static_cast<long>(spec::hex_tube_count(spec.twist().layers())) *
-             spec::twist_segments(spec.twist());
-    case v1::JobSpec::kCompression: {
-      const double n = spec::compression_grain_estimate(spec.compression());
-      if (!(n < 1e15)) return LONG_MAX;  // also NaN
-      return static_cast<long>(std::ceil(1.01 * n + 10)) + 2;
-    }
-    default:
-      return 0;
-  }
+  const JobKind* kind = job_kinds().of(spec);
+  return kind ? kind->element_bound(spec) : 0;
+}
+
+std::unique_ptr<Job> make_spec_job(const v1::JobSpec& spec, int threads,
+                                   const JobKindRegistry& kinds) {
+  const JobKind* kind = kinds.of(spec);
+  if (!kind)
+    throw std::invalid_argument(
+        "the job spec names no job kind this build runs (allowed: " + kinds.names() + ")");
+  IntegratorSettings s = integrator_settings(spec);
+  s.local_damping = kind->local_damping(spec);
+  if (threads > 0) s.threads = threads;
+  return kind->build(spec, s);
 }
 
 std::unique_ptr<Job> make_spec_job(const v1::JobSpec& spec, int threads) {
-  IntegratorSettings s = integrator_settings(spec);
-  if (threads > 0) s.threads = threads;
-  switch (spec.kind_case()) {
-    case v1::JobSpec::kTwist:
-      return std::make_unique<TwistJob>(twist_job_spec(spec), s);
-    case v1::JobSpec::kCompression:
-      return std::make_unique<CompressionJob>(compression_job_spec(spec), s);
-    default:
-      throw std::invalid_argument(
-          "the job spec names no job kind this build runs (allowed: twist, compression)");
-  }
+  return make_spec_job(spec, threads, job_kinds());
 }
 
-ReportJson summary_json(const Summary& s) {
-  ReportJson j = ReportJson::object();
-  for (const auto& [k, v] : s) std::visit([&, &k = k](const auto& x) { j[k] = x; }, v);
-  return j;
-}
+ReportJson summary_json(const Summary& s) { return summary_json(SummaryLayout{}, s); }
 
 ReportJson accuracy_json(const System& sys, bool with_balance) {
   ReportJson acc;
@@ -156,15 +78,18 @@ ReportJson performance_json(const System& sys, double wall_s) {
   return perf;
 }
 
-ReportJson job_report(Job& job, const std::string& job_id, const std::string& state,
+ReportJson job_report(Job& job, const std::string& job_id, JobState state,
                       const std::string& reason, double wall_s) {
-  const bool failed = state == "FAILED";
+  const bool failed = state == v1::FAILED;
+  const std::string kind(job.kind());
+  const SummaryLayout* layout = summary_layout(kind);
   ReportJson doc;
   doc["job_id"] = job_id;
-  doc["kind"] = std::string(job.kind());
-  doc["state"] = state;
+  doc["kind"] = kind;
+  doc["state"] = job_state_name(state);
   if (!reason.empty()) doc["reason"] = reason;
-  doc["summary"] = failed ? ReportJson::object() : summary_json(job.summary());
+  doc["summary"] = failed ? ReportJson::object()
+                          : summary_json(layout ? *layout : SummaryLayout{}, job.summary());
   doc["accuracy"] = accuracy_json(job.system(), !failed);
   doc["performance"] = performance_json(job.system(), wall_s);
   return doc;

@@ -1,9 +1,10 @@
+// Ranges as text, and the error collector every kind's validation writes to.
 #include "rules.h"
 
 #include <charconv>
 #include <cmath>
 
-namespace mdem::spec::detail {
+namespace mdem::spec {
 
 bool contains(const Range& r, double v) {
   if (!std::isfinite(v)) return false;
@@ -31,20 +32,29 @@ std::string allowed(const Range& r) {
   return s + ")";
 }
 
-const MaterialPreset* material_preset(mdem::v1::GrainMaterialKind kind) {
-  // scenes.md compression: Au E = 79 GPa, nu = 0.46, 19.3 g/cm3, plastic sigma_y 2-8 GPa;
-  // CdS E = 28 GPa, nu = 0.46, 4.82 g/cm3, brittle sigma_f = 4 GPa.
-  static constexpr MaterialPreset kGold{79.0, 0.46, 19.3, 8.0, mdem::v1::PLASTIC};
-  static constexpr MaterialPreset kCadmiumSulfide{28.0, 0.46, 4.82, 4.0, mdem::v1::BRITTLE};
-  switch (kind) {
-    case mdem::v1::GOLD:
-    case mdem::v1::GRAIN_MATERIAL_UNSPECIFIED:
-      return &kGold;
-    case mdem::v1::CADMIUM_SULFIDE:
-      return &kCadmiumSulfide;
-    default:
-      return nullptr;
-  }
+std::string interval_text(const Range& r) {
+  std::string s = r.lo_open ? "(" : "[";
+  s += number_text(r.lo) + ", " + number_text(r.hi);
+  s += r.hi_open ? ")" : "]";
+  if (!r.unit.empty()) s.append(" ").append(r.unit);
+  return s;
 }
 
-}  // namespace mdem::spec::detail
+void Checks::add(std::string field, std::string message) {
+  errors_.push_back({std::move(field), std::move(message)});
+}
+
+void Checks::real(const std::string& field, bool has, double v, const Range& range) {
+  if (!has) return;
+  if (!std::isfinite(v))
+    add(field, number_text(v) + " is not a finite number " + allowed(range));
+  else if (!contains(range, v))
+    add(field, number_text(v) + " is out of range " + allowed(range));
+}
+
+void Checks::integer(const std::string& field, bool has, long long v, const Range& range) {
+  if (has && !contains(range, static_cast<double>(v)))
+    add(field, std::to_string(v) + " is out of range " + allowed(range));
+}
+
+}  // namespace mdem::spec

@@ -1,118 +1,18 @@
 #pragma once
-// The defaults and allowed ranges of job.proto, shared by apply_defaults and validate.
-#include <cstddef>
-#include <string>
-#include <string_view>
-
-#include "mdem/v1/job.pb.h"
+// What the kinds' rules files share; the ranges and defaults themselves are in
+// mdem/spec_rules.h, the registry in mdem/spec_kinds.h.
+#include "mdem/spec_kinds.h"
+#include "mdem/spec_rules.h"
 
 namespace mdem::spec::detail {
 
-inline constexpr double kSegmentNm = 1.356;  // (10,10) CNT segment length T
+// A field's value, or its default when unset.
+inline double value_or(bool has, double v, double fallback) { return has ? v : fallback; }
 
-// An interval of allowed values, open or closed at each end, with the unit the message names.
-struct Range {
-  double lo;
-  double hi;
-  bool lo_open;
-  bool hi_open;
-  std::string_view unit;  // "" for counts
-  std::string_view note;  // appended after "; " when not empty
-};
-
-// Closed [lo, hi], half-open (lo, hi] and [lo, hi).
-constexpr Range closed(double lo, double hi, std::string_view unit, std::string_view note = {}) {
-  return {lo, hi, false, false, unit, note};
+// Whether the field's value (its default when unset) is within its range: cross-field rules
+// check only fields that are valid on their own, so one mistake gives one error.
+inline bool valid(bool has, double v, double fallback, const Range& range) {
+  return contains(range, value_or(has, v, fallback));
 }
-constexpr Range above(double lo, double hi, std::string_view unit) {
-  return {lo, hi, true, false, unit, {}};
-}
-constexpr Range below(double lo, double hi, std::string_view unit) {
-  return {lo, hi, false, true, unit, {}};
-}
-
-bool contains(const Range& r, double v);
-// "(allowed: > 0 and <= 500 nN·nm)"
-std::string allowed(const Range& r);
-// Shortest text that reads back as v: "67.8", "1e-06", "nan", "inf".
-std::string number_text(double v);
-
-// The preset grain materials of a compression job, in user units; nullptr for CUSTOM or a
-// number that names no material.
-struct MaterialPreset {
-  double youngs_gpa;
-  double poisson;
-  double density_g_cm3;
-  double strength_gpa;  // sigma_y of Au's plastic bonds, sigma_f of CdS's brittle ones
-  mdem::v1::GrainBondKind bond;
-};
-const MaterialPreset* material_preset(mdem::v1::GrainMaterialKind kind);
-
-namespace defaults {
-inline constexpr double kSafety = 0.6;
-inline constexpr int kThreads = 0;
-inline constexpr double kEnergyEveryPs = 1.0;
-inline constexpr double kSnapshotEveryPs = 10.0;
-inline constexpr unsigned long long kSeed = 1;
-inline constexpr double kAngleDeg = 0.0;
-inline constexpr int kWidth = 1;
-inline constexpr double kLengthFraction = 1.0;
-inline constexpr int kLayers = 6;
-inline constexpr double kLengthNm = 67.8;
-inline constexpr double kTorqueNnNm = 64.0;
-inline constexpr double kTorqueRate = 1.0;
-inline constexpr double kHoldPs = 100.0;
-inline constexpr bool kUnload = false;
-inline constexpr double kUnloadHoldPs = 50.0;
-inline constexpr int kGripSegments = 1;
-inline constexpr double kVdwDampingRatio = 0.03;
-inline constexpr double kLocalDamping = 0.1;
-inline constexpr double kTemperatureK = 0.0;
-// compression (the grain material's defaults are in compression_material)
-inline constexpr double kOuterRadiusNm = 10.0;
-inline constexpr double kInnerRadiusNm = 0.0;
-inline constexpr double kGrainRadiusMinNm = 1.0;
-inline constexpr double kGrainRadiusMaxNm = 2.0;
-inline constexpr double kPorosity = 0.4;
-inline constexpr double kPlatenSpeed = 0.01;
-// The peak displacement's default is this fraction of outer_radius_nm (20 % of the diameter).
-inline constexpr double kPeakPerOuterRadius = 0.4;
-inline constexpr bool kCompressionUnload = true;
-inline constexpr double kViscousRatio = 0.5;
-inline constexpr double kCompressionLocalDamping = 0.7;
-}  // namespace defaults
-
-namespace ranges {
-inline constexpr Range kDtPs = closed(1e-6, 1.0, "ps");
-inline constexpr Range kSafety = above(0.0, 1.0, "of the critical step");
-inline constexpr Range kThreads = closed(0, 256, "threads", "0 = all cores");
-inline constexpr Range kEnergyEveryPs = above(0.0, 1e6, "ps");
-inline constexpr Range kSnapshotEveryPs = closed(0.0, 1e6, "ps", "0 = no snapshots");
-inline constexpr Range kAngleDeg = below(0.0, 360.0, "degrees");
-inline constexpr Range kWidth = closed(1, 3, "rows");
-inline constexpr Range kLengthFraction = above(0.0, 1.0, "of the rope length");
-inline constexpr Range kLayers = closed(2, 10, "layers");
-inline constexpr Range kLengthNm = closed(5.0, 2000.0, "nm");
-inline constexpr Range kSpacingNm = closed(1.5, 2.5, "nm", "unset = vdW equilibrium");
-inline constexpr Range kTorqueNnNm = above(0.0, 500.0, "nN·nm");
-inline constexpr Range kTorqueRate = above(0.0, 100.0, "nN·nm/ps");
-inline constexpr Range kHoldPs = closed(0.0, 1e6, "ps");
-inline constexpr Range kUnloadHoldPs = closed(0.0, 1e6, "ps");
-inline constexpr Range kVdwDampingRatio = closed(0.0, 1.0, "");
-inline constexpr Range kLocalDamping = closed(0.0, 0.99, "");
-inline constexpr Range kTemperatureK = closed(0.0, 2000.0, "K");
-inline constexpr Range kOuterRadiusNm = closed(2.0, 1000.0, "nm");
-inline constexpr Range kInnerRadiusNm = closed(0.0, 1000.0, "nm", "0 = a full sphere");
-inline constexpr Range kGrainRadiusNm = closed(0.2, 100.0, "nm");
-inline constexpr Range kPorosity = {0.2, 0.95, true, true, "", {}};
-inline constexpr Range kYoungsGpa = above(0.0, 2000.0, "GPa");
-inline constexpr Range kPoisson = below(0.0, 0.5, "");
-inline constexpr Range kDensity = above(0.0, 50.0, "g/cm³");
-inline constexpr Range kStrengthGpa = above(0.0, 100.0, "GPa");
-inline constexpr Range kPlatenSpeed = above(0.0, 1.0, "nm/ps");
-inline constexpr Range kPeakDisplacementNm = above(0.0, 2000.0, "nm");
-inline constexpr Range kViscousRatio = closed(0.0, 1.0, "");
-inline constexpr std::size_t kNameMaxChars = 200;
-}  // namespace ranges
 
 }  // namespace mdem::spec::detail

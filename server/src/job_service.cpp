@@ -5,6 +5,7 @@
 #include <cmath>
 #include <regex>
 
+#include "mdem/job_runner.h"
 #include "mdem/spec.h"
 #include "mdem/spec_job.h"
 
@@ -99,7 +100,7 @@ Status JobServiceImpl::SubmitJob(grpc::ServerContext* ctx, const v1::SubmitJobRe
         std::unique_ptr<Job> job = make_spec_job(spec, 1);
         job->system().initialize();  // refuses a time step above the safe limit
         elements = static_cast<long>(job->system().elements().size());
-        total_steps = static_cast<long>(std::ceil(job->duration() / job->system().dt() - 1e-9));
+        total_steps = steps_needed(*job);
       } catch (const std::invalid_argument& e) {  // ConfigError included
         return Status(StatusCode::INVALID_ARGUMENT, std::string("invalid job: ") + e.what());
       } catch (const NumericalError& e) {

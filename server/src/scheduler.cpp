@@ -4,8 +4,10 @@
 
 #include <chrono>
 #include <filesystem>
+#include <optional>
 
 #include "checkpoint_file.h"
+#include "mdem/job_runner.h"
 #include "mdem/snapshot_proto.h"
 #include "mdem/spec_job.h"
 
@@ -50,8 +52,6 @@ std::vector<v1::JobEvent> snapshot_events(const Snapshot& s) {
   }
   return out;
 }
-
-const char* state_name(v1::JobState s) { return v1::JobState_Name(s).c_str(); }
 
 }  // namespace
 
@@ -136,9 +136,9 @@ void Scheduler::worker() {
 
 void Scheduler::check_steps(Job& job) const {
   job.system().initialize();
-  const double steps = std::ceil(job.duration() / job.system().dt() - 1e-9);
-  if (steps > static_cast<double>(config_.max_steps))
-    throw std::invalid_argument("the job needs " + std::to_string(static_cast<long>(steps)) +
+  const long steps = steps_needed(job);
+  if (steps > config_.max_steps)
+    throw std::invalid_argument("the job needs " + std::to_string(steps) +
                                 " steps, above this daemon's limit max_steps = " +
                                 std::to_string(config_.max_steps) + "; shorten it or raise dt");
 }
@@ -150,16 +150,19 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
   const std::string ckpt = checkpoint_path(row.id);
   const auto t0 = Clock::now();
   double wall_before = row.wall_s;
-  std::unique_ptr<Job> job;
-  std::string state = "SUCCEEDED", reason;
+  std::optional<JobRunner> runner;  // the shared build -> run -> classify -> report
+  Job* job = nullptr;
+  JobState state = v1::SUCCEEDED;
+  std::string reason;
   try {
-    job = make_spec_job(row.spec, row.threads);
+    job = &runner.emplace(row.spec, row.threads).job();
     if (row.total_steps <= 0 && row.checkpoint_step == 0) check_steps(*job);
     if (row.checkpoint_step > 0) try {
         const CheckpointData data = read_checkpoint(ckpt);
         load_checkpoint(*job, data.state);
       } catch (const std::exception& e) {
-        job.reset();  // a fresh scene is no report of this job
+        runner.reset();  // a fresh scene is no report of this job
+        job = nullptr;
         throw CheckpointFileError(std::string("cannot resume: ") + e.what() +
                                   "; the events logged up to step " + std::to_string(row.step) +
                                   " are kept; submit the spec again to rerun the job");
@@ -217,7 +220,10 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
         last_ckpt = Clock::now();
       }
     };
-    const JobRunResult r = run_job(*job, job_cadence(row.spec), obs);
+    const JobOutcome r = runner->run(obs, [&](Job& j) {
+      return ctl.reason + "; results up to step " + std::to_string(j.system().steps()) +
+             " (t = " + std::to_string(j.system().time()) + " ps) are kept";
+    });
     if (r.cancelled && ctl.stop == kDrain) {
       const long step = save(job->system().steps());
       ch->push(state_event(v1::QUEUED, "requeued: " + ctl.reason +
@@ -228,20 +234,18 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
       spdlog::info("event=job_requeued job={} step={}", row.id, step);
       return;
     }
-    if (r.cancelled) {
-      state = "CANCELLED";
-      reason = ctl.reason + "; results up to step " + std::to_string(job->system().steps()) +
-               " (t = " + std::to_string(job->system().time()) + " ps) are kept";
-    }
-  } catch (const NumericalError& e) {
-    state = "FAILED";
+    state = r.state;
+    reason = r.reason;
+  } catch (const NumericalError& e) {  // while resuming
+    state = v1::FAILED;
     reason = e.what();
   } catch (const std::invalid_argument& e) {  // a scene built only here (ConfigError included)
-    job.reset();
-    state = "FAILED";
+    runner.reset();
+    job = nullptr;
+    state = v1::FAILED;
     reason = std::string("invalid job: ") + e.what();
   } catch (const CheckpointFileError& e) {
-    state = "FAILED";
+    state = v1::FAILED;
     reason = e.what();
   } catch (const SqliteError& e) {
     // The log cannot be written: leave the job RUNNING in the database; reconcile requeues it.
@@ -249,21 +253,19 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
     writer_.close(row.id);
     return;
   } catch (const std::exception& e) {
-    state = "FAILED";
+    state = v1::FAILED;
     reason = std::string("internal error: ") + e.what();
   }
   const double wall = wall_before + seconds_since(t0);
   try {
-    if (job) ch->push(report_event(job_report(*job, row.id, state, reason, wall).dump()));
-    v1::JobState s = state == "SUCCEEDED"   ? v1::SUCCEEDED
-                     : state == "CANCELLED" ? v1::CANCELLED
-                                            : v1::FAILED;
+    const JobState s = state;
+    if (job) ch->push(report_event(job_report(*job, row.id, s, reason, wall).dump()));
     ch->push(state_event(s, reason));
     ch->flush();
     std::error_code ec;
     std::filesystem::remove(ckpt, ec);
-    spdlog::info("event=job_end job={} state={} wall_s={:.3f} reason=\"{}\"", row.id, state_name(s),
-                 wall, reason);
+    spdlog::info("event=job_end job={} state={} wall_s={:.3f} reason=\"{}\"", row.id,
+                 job_state_name(s), wall, reason);
   } catch (const std::exception& e) {
     spdlog::error("event=job_log_failed job={} error=\"{}\"", row.id, e.what());
   }

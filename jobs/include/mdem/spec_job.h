@@ -10,12 +10,15 @@
 #include "mdem/job/compression_job.h"
 #include "mdem/job/job.h"
 #include "mdem/job/twist_job.h"
+#include "mdem/job_kinds.h"
+#include "mdem/job_state.h"
 #include "mdem/v1/job.pb.h"
 
 namespace mdem {
 
-// The twist and compression jobs' engine specs (internal units), integrator settings (the
-// kind's local damping) and output cadence of a finalized spec.
+// The twist and compression jobs' engine specs (internal units; in each kind's own
+// <kind>_job_kind.cpp), integrator settings (the kind's local damping) and output cadence of a
+// finalized spec.
 TwistJobSpec twist_job_spec(const v1::JobSpec& spec);
 CompressionJobSpec compression_job_spec(const v1::JobSpec& spec);
 IntegratorSettings integrator_settings(const v1::JobSpec& spec);
@@ -36,15 +39,19 @@ bool builds_quickly(const v1::JobSpec& spec);
 // daemon gives each job its share of the machine). Throws std::invalid_argument for an impossible
 // scene or load and std::invalid_argument for a spec of a kind this build cannot run.
 std::unique_ptr<Job> make_spec_job(const v1::JobSpec& spec, int threads = 0);
+// The same with another registry of kinds (a test's own).
+std::unique_ptr<Job> make_spec_job(const v1::JobSpec& spec, int threads,
+                                   const JobKindRegistry& kinds);
 
 // The report of a job that ran (or stopped): {job_id, kind, state, reason?, summary, accuracy,
-// performance}. Keys in this order; the summary is empty for a FAILED job (its state is not a
-// result), and the energy-balance error is left out then.
-using ReportJson = nlohmann::ordered_json;
+// performance}. Keys in this order; the summary (in the order of the kind's declared layout) is
+// empty for a FAILED job (its state is not a result), and the energy-balance error is left out
+// then.
+// The summary without a layout: the engine's names in the engine's order.
 ReportJson summary_json(const Summary& s);
 ReportJson accuracy_json(const System& sys, bool with_balance);
 ReportJson performance_json(const System& sys, double wall_s);
-ReportJson job_report(Job& job, const std::string& job_id, const std::string& state,
+ReportJson job_report(Job& job, const std::string& job_id, JobState state,
                       const std::string& reason, double wall_s);
 
 }  // namespace mdem

@@ -1,0 +1,53 @@
+#pragma once
+// The one job runner behind `mdem run` (in-process) and mdemd's workers: build the engine job of
+// a finalized spec, run it with the caller's observer, classify how it ended and write its
+// report. The callers add only what is theirs: where frames and snapshots go, what cancels, and
+// (the daemon) checkpoints, resume and requeue.
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "mdem/job/job.h"
+#include "mdem/job_state.h"
+#include "mdem/spec_job.h"
+#include "mdem/v1/job.pb.h"
+
+namespace mdem {
+
+// Steps a job needs: ceil(duration / dt), at least 1 (the system must be initialized).
+long steps_needed(Job& job);
+
+struct JobOutcome {
+  JobState state = v1::SUCCEEDED;
+  std::string reason;
+  bool cancelled = false;  // the observer's cancelled() stopped it (state CANCELLED)
+  long steps = 0;          // the step reached
+  double wall_s = 0;       // this run's wall time
+};
+
+class JobRunner {
+ public:
+  // Builds the job (make_spec_job); threads > 0 overrides the spec's. Throws what building
+  // throws (std::invalid_argument for an impossible scene or load).
+  explicit JobRunner(const v1::JobSpec& spec, int threads = 0);
+
+  Job& job() { return *job_; }
+  const v1::JobSpec& spec() const { return spec_; }
+
+  // run_job at the spec's cadence. A run the observer cancels is CANCELLED with the reason
+  // cancel_reason(job) gives; a NumericalError is FAILED with its message; other exceptions
+  // propagate (the caller knows what they mean).
+  JobOutcome run(const JobObserver& observer,
+                 const std::function<std::string(Job&)>& cancel_reason);
+
+  // The report (job_report) of the outcome; wall_before: wall time of earlier runs of the job.
+  ReportJson report(const std::string& job_id, const JobOutcome& outcome,
+                    double wall_before = 0) const;
+
+ private:
+  v1::JobSpec spec_;
+  std::unique_ptr<Job> job_;
+};
+
+}  // namespace mdem
