@@ -1,8 +1,6 @@
 // JSON in and out through Protobuf's JSON mapping.
 #include <google/protobuf/util/json_util.h>
 
-#include <nlohmann/json.hpp>
-
 #include "input.h"
 #include "mdem/spec.h"
 
@@ -10,46 +8,17 @@ namespace mdem::spec {
 
 namespace {
 
-// Checks JSON syntax only (no document is built) to report a syntax error with its line and
-// column, which protobuf's parser does not give.
-class SyntaxCheck : public nlohmann::json_sax<nlohmann::json> {
- public:
-  bool null() override { return true; }
-  bool boolean(bool) override { return true; }
-  bool number_integer(number_integer_t) override { return true; }
-  bool number_unsigned(number_unsigned_t) override { return true; }
-  bool number_float(number_float_t, const string_t&) override { return true; }
-  bool string(string_t&) override { return true; }
-  bool binary(binary_t&) override { return true; }
-  bool start_object(std::size_t) override { return true; }
-  bool key(string_t&) override { return true; }
-  bool end_object() override { return true; }
-  bool start_array(std::size_t) override { return true; }
-  bool end_array() override { return true; }
-  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception& e) override {
-    message_ = e.what();
-    return false;
-  }
-  // nlohmann's message without its "[json.exception.parse_error.101] " prefix.
-  std::string message() const {
-    const std::size_t end = message_.find("] ");
-    return end == std::string::npos ? message_ : message_.substr(end + 2);
-  }
-
- private:
-  std::string message_;
-};
-
-void check_syntax(std::string_view json, const std::string& field) {
-  SyntaxCheck check;
-  if (!nlohmann::json::sax_parse(json, &check)) throw SpecError({{field, check.message()}});
-}
-
-// Protobuf's message: its first line (the rest repeats the text around the error), without the
-// ": " it puts first when the error is at the root.
+// Protobuf's message, should check_json have let a problem through: its first line (the rest
+// repeats the text around the error), "(twist.layers): invalid value ..." read as
+// "twist.layers: invalid value ...".
 std::string protobuf_message(const std::string& message) {
   std::string line = message.substr(0, message.find('\n'));
-  return line.rfind(": ", 0) == 0 ? line.substr(2) : line;
+  if (line.rfind(": ", 0) == 0) line = line.substr(2);
+  if (line.rfind('(', 0) == 0) {
+    const std::size_t close = line.find(')');
+    if (close != std::string::npos) line = line.substr(1, close - 1) + line.substr(close + 1);
+  }
+  return line;
 }
 
 }  // namespace
@@ -62,9 +31,10 @@ void check_size(std::size_t bytes, const std::string& field, const std::string& 
                                std::to_string(kMaxSpecBytes >> 20) + " MiB)"}});
 }
 
-mdem::v1::JobSpec parse_json_as(std::string_view json, const std::string& field) {
+mdem::v1::JobSpec parse_json_as(std::string_view json, const std::string& field,
+                                const Locate& locate) {
   check_size(json.size(), field, "the spec");
-  check_syntax(json, field);
+  check_json(json, field, locate);
   google::protobuf::util::JsonParseOptions options;
   options.ignore_unknown_fields = false;
   mdem::v1::JobSpec spec;
@@ -76,7 +46,10 @@ mdem::v1::JobSpec parse_json_as(std::string_view json, const std::string& field)
 
 }  // namespace detail
 
-mdem::v1::JobSpec parse_json(std::string_view text) { return detail::parse_json_as(text, "json"); }
+mdem::v1::JobSpec parse_json(std::string_view text) {
+  return detail::parse_json_as(
+      text, "json", [text](std::size_t offset) { return detail::text_location(text, offset); });
+}
 
 std::string to_json(const mdem::v1::JobSpec& spec, bool pretty) {
   google::protobuf::util::JsonPrintOptions options;

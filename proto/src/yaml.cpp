@@ -2,9 +2,11 @@
 #include <yaml-cpp/depthguard.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cstdio>
-#include <regex>
-#include <set>
+#include <iterator>
+#include <utility>
+#include <vector>
 
 #include "input.h"
 #include "mdem/spec.h"
@@ -16,16 +18,21 @@ namespace {
 using google::protobuf::Descriptor;
 using google::protobuf::FieldDescriptor;
 
-constexpr int kMaxDepth = 32;
+using detail::kMaxDepth;
 
 std::string location(const YAML::Mark& mark) {
-  if (mark.line < 0) return "";
-  return "line " + std::to_string(mark.line + 1) + ", column " + std::to_string(mark.column + 1) +
-         ": ";
+  return "line " + std::to_string(mark.line + 1) + ", column " + std::to_string(mark.column + 1);
 }
 
 [[noreturn]] void fail(const YAML::Mark& mark, const std::string& message) {
-  throw SpecError({{"yaml", location(mark) + message}});
+  throw SpecError({{"yaml", mark.line < 0 ? message : location(mark) + ": " + message}});
+}
+
+// A problem with the value at `path`, "" for the document.
+[[noreturn]] void fail_at(const std::string& path, const YAML::Mark& mark,
+                          const std::string& message) {
+  if (path.empty()) fail(mark, message);
+  throw SpecError({{"yaml", path + " (" + location(mark) + "): " + message}});
 }
 
 std::string json_string(std::string_view s) {
@@ -52,27 +59,49 @@ bool is_quoted_or_str(const YAML::Node& n) {
 
 // YAML 1.2 core-schema special floats, as the JSON mapping's strings; "" if s is not one.
 std::string special_float(const std::string& s) {
-  static const std::regex nan(R"(\.(nan|NaN|NAN))");
-  static const std::regex inf(R"([+]?\.(inf|Inf|INF))");
-  static const std::regex neg_inf(R"(-\.(inf|Inf|INF))");
-  if (std::regex_match(s, nan)) return "\"NaN\"";
-  if (std::regex_match(s, inf)) return "\"Infinity\"";
-  if (std::regex_match(s, neg_inf)) return "\"-Infinity\"";
+  for (const char* nan : {".nan", ".NaN", ".NAN"})
+    if (s == nan) return "\"NaN\"";
+  for (const char* inf : {".inf", ".Inf", ".INF"}) {
+    if (s == inf || s == std::string("+") + inf) return "\"Infinity\"";
+    if (s == std::string("-") + inf) return "\"-Infinity\"";
+  }
   return "";
 }
 
-// A YAML decimal number as JSON number text ("+.5" -> "0.5", "007" -> "7", "1." -> "1"); "" if
-// s is not a number. The digits are kept as written, so 64-bit integers stay exact.
+// A YAML decimal number, [-+]?[0-9]*(.[0-9]*)?([eE][-+]?[0-9]+)? with a digit before or after
+// the point, as JSON number text ("+.5" -> "0.5", "007" -> "7", "1." -> "1"); "" if s is not a
+// number. The digits are kept as written, so 64-bit integers stay exact. Read by hand: a
+// std::regex recurses per character and overflows the stack on a long scalar.
 std::string json_number(const std::string& s) {
-  static const std::regex number(R"(([-+]?)([0-9]*)(?:\.([0-9]*))?([eE][-+]?[0-9]+)?)");
-  std::smatch m;
-  if (!std::regex_match(s, m, number) || (m[2].length() == 0 && m[3].length() == 0)) return "";
-  std::string out = m[1] == "-" ? "-" : "";
-  const std::string whole = m[2].str();
+  std::size_t i = 0;
+  const auto digits = [&] {
+    const std::size_t start = i;
+    while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i;
+    return s.substr(start, i - start);
+  };
+  const bool negative = i < s.size() && s[i] == '-';
+  if (i < s.size() && (s[i] == '-' || s[i] == '+')) ++i;
+  const std::string whole = digits();
+  std::string fraction;
+  const bool point = i < s.size() && s[i] == '.';
+  if (point) {
+    ++i;
+    fraction = digits();
+  }
+  if (whole.empty() && fraction.empty()) return "";
+  std::string exponent;
+  if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
+    const std::size_t start = i++;
+    if (i < s.size() && (s[i] == '-' || s[i] == '+')) ++i;
+    if (digits().empty()) return "";
+    exponent = s.substr(start);
+  }
+  if (i != s.size()) return "";
+  std::string out = negative ? "-" : "";
   const std::size_t first = whole.find_first_not_of('0');
   out += first == std::string::npos ? "0" : whole.substr(first);
-  if (m[3].length() > 0) out += "." + m[3].str();
-  return out + m[4].str();
+  if (!fraction.empty()) out += "." + fraction;
+  return out + exponent;
 }
 
 std::string plain_scalar(const std::string& s) {
@@ -106,27 +135,42 @@ Slot slot_of(const Descriptor* message, const std::string& key) {
   return {field->message_type(), text};
 }
 
+// The JSON text of a YAML document, and where in the YAML each key and value of it came from,
+// so that check_json's findings (duplicate keys among them) point into the YAML.
 class YamlToJson {
  public:
   std::string convert(const YAML::Node& root) {
     if (root.IsNull()) fail(root.Mark(), "the document is empty (expected e.g. twist: {})");
     if (!root.IsMap()) fail(root.Mark(), "the document is not a mapping of spec fields");
-    value(root, {mdem::v1::JobSpec::descriptor(), false}, 0);
+    value(root, {mdem::v1::JobSpec::descriptor(), false}, "", 0);
     return std::move(out_);
   }
 
+  // "line L, column C" in the YAML of the JSON text's byte `offset`.
+  std::string locate(std::size_t offset) const {
+    auto after = std::upper_bound(
+        marks_.begin(), marks_.end(), offset,
+        [](std::size_t o, const std::pair<std::size_t, YAML::Mark>& m) { return o < m.first; });
+    if (after == marks_.begin()) return location(YAML::Mark());
+    return location(std::prev(after)->second);
+  }
+
  private:
-  void value(const YAML::Node& n, const Slot& slot, int depth) {
+  void value(const YAML::Node& n, const Slot& slot, const std::string& path, int depth) {
     if (depth > kMaxDepth)
-      fail(n.Mark(), "nested deeper than " + std::to_string(kMaxDepth) + " levels");
+      fail_at(path, n.Mark(),
+              "nested deeper than " + std::to_string(kMaxDepth) + " levels (allowed: at most " +
+                  std::to_string(kMaxDepth) + ")");
     if (out_.size() > kMaxSpecBytes)  // aliases can repeat a node exponentially often
-      fail(n.Mark(), "expands to more than " + std::to_string(kMaxSpecBytes >> 20) +
-                         " MiB of JSON (through aliases)");
+      fail_at(path, n.Mark(),
+              "expands to more than " + std::to_string(kMaxSpecBytes >> 20) +
+                  " MiB of JSON (through aliases)");
+    marks_.emplace_back(out_.size(), n.Mark());
     switch (n.Type()) {
       case YAML::NodeType::Map:
-        return map(n, slot.message, depth);
+        return map(n, slot.message, path, depth);
       case YAML::NodeType::Sequence:
-        return sequence(n, slot, depth);
+        return sequence(n, slot, path, depth);
       case YAML::NodeType::Scalar:
         return scalar(n, slot);
       default:
@@ -134,25 +178,28 @@ class YamlToJson {
     }
   }
 
-  void map(const YAML::Node& n, const Descriptor* message, int depth) {
-    std::set<std::string> keys;
+  // Duplicate keys are left in for check_json, which finds them by field (either spelling).
+  void map(const YAML::Node& n, const Descriptor* message, const std::string& path, int depth) {
     out_ += '{';
+    bool first = true;
     for (auto it = n.begin(); it != n.end(); ++it) {
-      if (!it->first.IsScalar()) fail(it->first.Mark(), "a key must be a plain name");
+      if (!it->first.IsScalar())
+        fail_at(path, it->first.Mark(), "a key must be a plain name (allowed: field names)");
       const std::string key = it->first.Scalar();
-      if (!keys.insert(key).second) fail(it->first.Mark(), "duplicate key \"" + key + "\"");
-      if (keys.size() > 1) out_ += ',';
+      if (!first) out_ += ',';
+      first = false;
+      marks_.emplace_back(out_.size(), it->first.Mark());
       out_ += json_string(key) + ':';
-      value(it->second, slot_of(message, key), depth + 1);
+      value(it->second, slot_of(message, key), path.empty() ? key : path + "." + key, depth + 1);
     }
     out_ += '}';
   }
 
-  void sequence(const YAML::Node& n, const Slot& slot, int depth) {
+  void sequence(const YAML::Node& n, const Slot& slot, const std::string& path, int depth) {
     out_ += '[';
     for (std::size_t i = 0; i < n.size(); ++i) {
       if (i > 0) out_ += ',';
-      value(n[i], slot, depth + 1);
+      value(n[i], slot, path + "[" + std::to_string(i) + "]", depth + 1);
     }
     out_ += ']';
   }
@@ -165,6 +212,7 @@ class YamlToJson {
   }
 
   std::string out_;
+  std::vector<std::pair<std::size_t, YAML::Mark>> marks_;  // JSON offset -> YAML mark, ascending
 };
 
 std::vector<YAML::Node> load_documents(std::string_view text) {
@@ -188,7 +236,10 @@ mdem::v1::JobSpec parse_yaml(std::string_view text) {
     fail(YAML::Mark::null_mark(), "the document is empty (expected e.g. twist: {})");
   if (docs.size() > 1)
     fail(docs[1].Mark(), std::to_string(docs.size()) + " documents found (allowed: one)");
-  return detail::parse_json_as(YamlToJson().convert(docs[0]), "yaml");
+  YamlToJson converter;
+  const std::string json = converter.convert(docs[0]);
+  return detail::parse_json_as(
+      json, "yaml", [&converter](std::size_t offset) { return converter.locate(offset); });
 }
 
 }  // namespace mdem::spec
