@@ -160,26 +160,14 @@ void System::initialize() {
   threads_ = s.threads > 0 ? s.threads : omp_get_max_threads();
   omp_set_num_threads(threads_);
 
-  double cutoff = 0;
   dissipative_ = s.local_damping > 0;
   bool model_damping = false;
-  for (const auto& m : models_) {
-    cutoff = std::max(cutoff, m->cutoff());
-    model_damping = model_damping || m->dissipative();
-  }
+  for (const auto& m : models_) model_damping = model_damping || m->dissipative();
   dissipative_ = dissipative_ || model_damping;
-  if (cutoff > 0) {
-    nlist_ = std::make_unique<NeighborList>(cutoff, s.skin);
-    std::vector<const ForceModel*> pair_models;
-    for (const auto& m : models_)
-      if (m->cutoff() > 0) pair_models.push_back(m.get());
-    nlist_->set_exclusion([pair_models](const Elements& el, std::size_t i, std::size_t j) {
-      for (const ForceModel* m : pair_models)
-        if (!m->excludes(el, i, j)) return false;
-      return true;
-    });
-  } else {
-    nlist_.reset();
+  try {
+    pairs_.setup(models_, s.skin, domain_);
+  } catch (const std::invalid_argument& e) {
+    bad(e.what());
   }
 
   const std::size_t n = el_.size();
@@ -229,9 +217,9 @@ void System::refresh() {
 }
 
 void System::compute_forces() {
-  if (nlist_ && nlist_->needs_rebuild(el_)) nlist_->build(el_);
+  pairs_.update(el_);
   sink_.clear();
-  for (const auto& m : models_) m->compute(el_, m->cutoff() > 0 ? nlist_.get() : nullptr, sink_);
+  for (const auto& m : models_) m->compute(el_, pairs_.list_of(m.get()), sink_);
   ledger_.potential = sink_.reduce(el_.f, el_.t, fd_, td_);
 
   // PFC local damping on the unbalanced force of every free DOF: F_k -= α|F_k| sign(v_k).
@@ -274,7 +262,7 @@ void System::update_kinetic() {
 double System::compute_critical_dt() const {
   StiffnessSums s;
   s.reset(el_.size());
-  for (const auto& m : models_) m->add_stiffness(el_, m->cutoff() > 0 ? nlist_.get() : nullptr, s);
+  for (const auto& m : models_) m->add_stiffness(el_, pairs_.list_of(m.get()), s);
   double dt = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < el_.size(); ++i) {
     const double m = el_.mass[i];

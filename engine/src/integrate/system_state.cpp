@@ -117,8 +117,9 @@ void System::save_state(StateWriter& w) const {
   w.begin("damping");
   // The *_prev_ arrays are empty today; saved so that bookkeeping using them resumes too.
   for (const auto* a : {&fd_, &td_, &f_prev_, &t_prev_, &fext_prev_, &text_prev_}) w.put(*a);
-  w.put(nlist_ != nullptr);
-  if (nlist_) nlist_->save_state(w);
+  // One section per neighbour sub-list of the pair table (one for every scene so far).
+  w.put(!pairs_.empty());
+  for (const auto& e : pairs_.entries()) e.list->save_state(w);
   w.begin("models");
   w.put(static_cast<std::uint64_t>(models_.size()));
   for (const auto& m : models_) {
@@ -153,10 +154,10 @@ void System::load_state(StateReader& r) {
   r.get(td_, "td", n);
   for (auto* a : {&f_prev_, &t_prev_, &fext_prev_, &text_prev_}) r.get(*a, "work bookkeeping");
   const bool has_list = r.get_bool("has neighbour list");
-  if (has_list != (nlist_ != nullptr))
+  if (has_list != !pairs_.empty())
     r.fail("has neighbour list", has_list ? "checkpoint has a neighbour list, this job has none"
                                           : "checkpoint has no neighbour list, this job needs one");
-  if (nlist_) nlist_->load_state(r, n);
+  for (const auto& e : pairs_.entries()) e.list->load_state(r, n);
 
   r.begin("models");
   const auto n_models = r.get<std::uint64_t>("model count");

@@ -41,11 +41,14 @@ constexpr long kReach = 1;
 
 }  // namespace
 
-NeighborList::NeighborList(double cutoff, double skin) : cutoff_(cutoff), skin_(skin) {
+NeighborList::NeighborList(double cutoff, double skin, Domain domain)
+    : cutoff_(cutoff), skin_(skin), domain_(domain) {
   if (!std::isfinite(cutoff) || cutoff <= 0)
     throw std::invalid_argument("neighbour list: cutoff must be finite and > 0");
   if (!std::isfinite(skin) || skin < 0)
     throw std::invalid_argument("neighbour list: skin must be finite and >= 0");
+  if (const std::string e = domain_.check_reach(cutoff + skin); !e.empty())
+    throw std::invalid_argument("neighbour list: " + e);
 }
 
 double NeighborList::max_displacement(const Elements& el) const {
@@ -76,23 +79,36 @@ void NeighborList::build(const Elements& el) {
     throw std::runtime_error("neighbour list: more than 2^32 - 1 elements");
   const double range = cutoff_ + skin_;
   const double range2 = range * range;
+  const bool all_kinds = kinds_.is_all();
+  const bool periodic = domain_.any_periodic();
+  // Elements of kinds no listed pair involves are not binned (cell kNone).
+  auto binned = [&](std::size_t i) { return all_kinds || kinds_.involves(el.kind[i]); };
 
-  // Bounding box of the current positions; every position must be finite.
+  // Bounding box of the current positions (wrapped into the box along periodic axes, where the
+  // grid spans the box); every position must be finite.
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::max());
   Vec3 hi = Vec3::Constant(std::numeric_limits<double>::lowest());
+  std::size_t n_binned = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const Vec3& p = el.x[i];
     if (!p.allFinite()) throw_non_finite(el, i);
+    if (!binned(i)) continue;
+    ++n_binned;
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
-  if (n == 0) lo = hi = Vec3::Zero();
+  if (n_binned == 0) lo = hi = Vec3::Zero();
+  for (int d = 0; d < 3; ++d)
+    if (domain_.periodic(d)) {
+      lo[d] = domain_.lo()[d];
+      hi[d] = domain_.hi()[d];
+    }
   const Vec3 ext = hi - lo;
 
   // Cell grid: cells at least range / kReach wide (a pair closer than `range` is then at most
   // kReach cells apart along each axis), at most max(64, 4N) cells in all (a sparse cloud over a
   // large box gets wider cells instead of a huge empty grid).
-  const double max_cells = std::max(64.0, 4.0 * static_cast<double>(n));
+  const double max_cells = std::max(64.0, 4.0 * static_cast<double>(n_binned));
   double cell = range / kReach * (1.0 + kCellMargin);
   long dims[3];
   auto grid = [&](double c) {
@@ -114,21 +130,27 @@ void NeighborList::build(const Elements& el) {
   for (int d = 0; d < 3; ++d) inv_w[d] = ext[d] > 0 ? static_cast<double>(dims[d]) / ext[d] : 0.0;
 
   // Counting sort of the elements into cells, stable in element index.
+  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   cell_of_.resize(n);
   cell_start_.assign(n_cells + 1, 0u);
   for (std::size_t i = 0; i < n; ++i) {
-    const Vec3 r = (el.x[i] - lo).cwiseProduct(inv_w);
-    const long cx = std::min(static_cast<long>(r.x()), nx - 1);
-    const long cy = std::min(static_cast<long>(r.y()), ny - 1);
-    const long cz = std::min(static_cast<long>(r.z()), nz - 1);
+    if (!binned(i)) {
+      cell_of_[i] = kNone;
+      continue;
+    }
+    const Vec3 r = ((periodic ? domain_.wrap(el.x[i]) : el.x[i]) - lo).cwiseProduct(inv_w);
+    const long cx = std::clamp(static_cast<long>(r.x()), 0L, nx - 1);
+    const long cy = std::clamp(static_cast<long>(r.y()), 0L, ny - 1);
+    const long cz = std::clamp(static_cast<long>(r.z()), 0L, nz - 1);
     const auto c = static_cast<std::uint32_t>(cx + nx * (cy + ny * cz));
     cell_of_[i] = c;
     ++cell_start_[c + 1];
   }
   for (std::size_t c = 0; c < n_cells; ++c) cell_start_[c + 1] += cell_start_[c];
-  cell_elem_.resize(n);
-  cell_x_.resize(n);
+  cell_elem_.resize(n_binned);
+  cell_x_.resize(n_binned);
   for (std::size_t i = 0; i < n; ++i) {
+    if (cell_of_[i] == kNone) continue;
     const std::uint32_t k = cell_start_[cell_of_[i]]++;  // start of cell c moves to its end
     cell_elem_[k] = static_cast<std::uint32_t>(i);
     cell_x_[k] = el.x[i];
@@ -136,10 +158,41 @@ void NeighborList::build(const Elements& el) {
   for (std::size_t c = n_cells; c > 0; --c) cell_start_[c] = cell_start_[c - 1];
   cell_start_[0] = 0;
 
+  // The cells within kReach of cell c along one axis, as at most two runs [first, last]: one run
+  // clipped at the grid's ends on an open axis; on a periodic axis the run wraps (split in two at
+  // the end of the grid), and an axis of at most 2·kReach + 1 cells is scanned whole, once.
+  struct Runs {
+    long first[2], last[2];
+    int count;
+  };
+  auto runs = [&](long c, long dim, bool wraps) {
+    Runs r{};
+    if (!wraps) {
+      r.first[0] = std::max(c - kReach, 0L);
+      r.last[0] = std::min(c + kReach, dim - 1);
+      r.count = 1;
+    } else if (dim <= 2 * kReach + 1) {
+      r.first[0] = 0;
+      r.last[0] = dim - 1;
+      r.count = 1;
+    } else if (c - kReach < 0) {
+      r = {{0, c - kReach + dim}, {c + kReach, dim - 1}, 2};
+    } else if (c + kReach > dim - 1) {
+      r = {{c - kReach, 0}, {dim - 1, c + kReach - dim}, 2};
+    } else {
+      r.first[0] = c - kReach;
+      r.last[0] = c + kReach;
+      r.count = 1;
+    }
+    return r;
+  };
+  const bool wrap_x = domain_.periodic(0), wrap_y = domain_.periodic(1),
+             wrap_z = domain_.periodic(2);
+
   // Neighbours of each i: scan the block of cells within kReach of i's cell. Cells adjacent in x
-  // are adjacent in memory, so each (y, z) row of the block is one contiguous run. Thread t
-  // handles a static contiguous range of i and collects into its own buffer; the per-i lists are
-  // sorted, so the result does not depend on the thread count or scheduling.
+  // are adjacent in memory, so each (y, z) row of the block is one contiguous run (two where it
+  // wraps). Thread t handles a static contiguous range of i and collects into its own buffer; the
+  // per-i lists are sorted, so the result does not depend on the thread count or scheduling.
   offsets_.resize(n + 1);
   offsets_[0] = 0;
   const int max_threads = n >= kParallelMin ? omp_get_max_threads() : 1;
@@ -161,26 +214,33 @@ void NeighborList::build(const Elements& el) {
     try {
       for (std::size_t i = begin; i < end; ++i) {
         const std::uint32_t c = cell_of_[i];
+        if (c == kNone) {
+          offsets_[i + 1] = 0;
+          continue;
+        }
         const long cx = c % nx, cy = (c / nx) % ny, cz = c / (nx * ny);
-        const long x0 = std::max(cx - kReach, 0L), x1 = std::min(cx + kReach, nx - 1);
-        const long y0 = std::max(cy - kReach, 0L), y1 = std::min(cy + kReach, ny - 1);
-        const long z0 = std::max(cz - kReach, 0L), z1 = std::min(cz + kReach, nz - 1);
+        const Runs rx = runs(cx, nx, wrap_x), ry = runs(cy, ny, wrap_y), rz = runs(cz, nz, wrap_z);
+        // Calls row(kb, ke) for each contiguous run of candidates in the block.
+        auto for_each_run = [&](auto&& row) {
+          for (int a = 0; a < rz.count; ++a)
+            for (long z = rz.first[a]; z <= rz.last[a]; ++z)
+              for (int b = 0; b < ry.count; ++b)
+                for (long y = ry.first[b]; y <= ry.last[b]; ++y) {
+                  const long base = nx * (y + ny * z);
+                  for (int e = 0; e < rx.count; ++e)
+                    row(cell_start_[base + rx.first[e]], cell_start_[base + rx.last[e] + 1]);
+                }
+        };
         // Room for every candidate, so the scan can write before it tests.
         std::size_t candidates = 0;
-        for (long z = z0; z <= z1; ++z)
-          for (long y = y0; y <= y1; ++y) {
-            const long row = nx * (y + ny * z);
-            candidates += cell_start_[row + x1 + 1] - cell_start_[row + x0];
-          }
+        for_each_run([&](std::uint32_t kb, std::uint32_t ke) { candidates += ke - kb; });
         if (out.size() < used + candidates) out.resize(std::max(2 * out.size(), used + candidates));
         const Vec3 xi = el.x[i];
         const auto ii = static_cast<std::uint32_t>(i);
         std::uint32_t* const first = out.data() + used;
         std::uint32_t* o = first;
-        for (long z = z0; z <= z1; ++z) {
-          for (long y = y0; y <= y1; ++y) {
-            const long row = nx * (y + ny * z);
-            const std::uint32_t kb = cell_start_[row + x0], ke = cell_start_[row + x1 + 1];
+        if (!periodic) {
+          for_each_run([&](std::uint32_t kb, std::uint32_t ke) {
             for (std::uint32_t k = kb; k < ke; ++k) {
               // Branch-free: half the candidates fail j > i in no predictable pattern.
               const std::uint32_t j = cell_elem_[k];
@@ -188,7 +248,22 @@ void NeighborList::build(const Elements& el) {
               *o = j;
               o += keep;
             }
-          }
+          });
+        } else {
+          for_each_run([&](std::uint32_t kb, std::uint32_t ke) {
+            for (std::uint32_t k = kb; k < ke; ++k) {
+              const std::uint32_t j = cell_elem_[k];
+              const bool keep = (j > ii) & (domain_.delta(xi, cell_x_[k]).squaredNorm() < range2);
+              *o = j;
+              o += keep;
+            }
+          });
+        }
+        if (!all_kinds) {
+          std::uint32_t* w = first;
+          for (std::uint32_t* r = first; r != o; ++r)
+            if (kinds_.has(el.kind[i], el.kind[*r])) *w++ = *r;
+          o = w;
         }
         if (exclusion) {
           std::uint32_t* w = first;

@@ -3,8 +3,11 @@
 //
 // A model reads element state and writes forces, torques and energy into per-thread slots of a
 // ForceSink, so the threaded force loop has no races and sums in a fixed order (deterministic at
-// a fixed thread count). A model that acts on pairs within a cutoff declares it; the system then
-// builds one neighbour list (cell list + Verlet skin) for all such models.
+// a fixed thread count). A model that acts on pairs within a cutoff declares it, with the pairs of
+// element kinds it acts on; the system's pair table (neighbor/pair_table.h) then builds one
+// neighbour sub-list (cell list + Verlet skin) per such model, or hands a model that belongs to
+// another one's pairs (a contact's dashpot) that model's sub-list. Pair models are written as
+// kernels of one pair run by one driver (force/pair_driver.h).
 #include <memory>
 #include <string>
 #include <string_view>
@@ -12,6 +15,7 @@
 
 #include "mdem/core/elements.h"
 #include "mdem/core/energy.h"
+#include "mdem/neighbor/kind_pairs.h"
 
 namespace mdem {
 
@@ -75,12 +79,19 @@ class ForceModel {
   virtual ~ForceModel() = default;
   virtual std::string_view name() const = 0;
 
-  // > 0: the model acts on element pairs closer than this (nm) and is handed the neighbour list.
+  // > 0: the model acts on element pairs closer than this (nm) and is handed its neighbour
+  // sub-list.
   virtual double cutoff() const { return 0.0; }
-  // For pair models: whether the pair (i, j) is never an interaction of this model (e.g. two
-  // segments of one tube within the exclusion, or element kinds the model does not handle). The
-  // neighbour list leaves a pair out only if every pair model excludes it.
+  // For pair models: the pairs of element kinds the model acts on (its rows of the pair table).
+  virtual KindPairs kinds() const { return KindPairs::all(); }
+  // For pair models: whether the pair (i, j) is never an interaction of this model (element kinds
+  // outside kinds(), or e.g. two segments of one tube within the exclusion). The model's sub-list
+  // leaves such pairs out.
   virtual bool excludes(const Elements&, std::size_t, std::size_t) const { return false; }
+  // For pair models that belong to another model's pairs (a contact's dashpot acts on exactly the
+  // pairs of its contact): that model's name(). The system then hands this model the owner's
+  // sub-list; when no such model is present, the model gets a sub-list of its own.
+  virtual std::string_view pair_owner() const { return {}; }
 
   // True for velocity-dependent (damping) models, which write to the sink's damping buffers.
   virtual bool dissipative() const { return false; }

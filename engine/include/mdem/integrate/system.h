@@ -10,10 +10,12 @@
 #include <string>
 #include <vector>
 
+#include "mdem/core/domain.h"
 #include "mdem/core/elements.h"
 #include "mdem/core/energy.h"
 #include "mdem/force/force_model.h"
 #include "mdem/neighbor/neighbor_list.h"
+#include "mdem/neighbor/pair_table.h"
 
 namespace mdem {
 
@@ -120,7 +122,23 @@ class System {
   double energy_balance_error() const;
   // Damping forces of the last evaluation (contact dashpots + local damping), per element.
   const std::vector<Vec3>& damping_forces() const { return fd_; }
-  const NeighborList* neighbors() const { return nlist_.get(); }
+  // The neighbour sub-list of the first pair model (null without pair models), and that of model
+  // m (null when m is not a pair model of this system).
+  const NeighborList* neighbors() const {
+    return pairs_.empty() ? nullptr : pairs_.entries().front().list.get();
+  }
+  const NeighborList* neighbors(const ForceModel& m) const { return pairs_.list_of(&m); }
+  // Which pair models act on which kind pairs over which sub-list (set up by initialize).
+  const PairTable& pair_table() const { return pairs_; }
+
+  // The box: every pair displacement is its minimum image (open on all axes by default). Takes
+  // effect at the next initialize(); a periodic axis must be at least 2·(cutoff + skin) long for
+  // every pair model (else initialize throws ConfigError).
+  void set_domain(const Domain& d) {
+    domain_ = d;
+    initialized_ = false;
+  }
+  const Domain& domain() const { return domain_; }
 
   // Recomputes forces and energies at the current state without moving (after a caller edited
   // positions or models).
@@ -139,7 +157,8 @@ class System {
   IntegratorSettings settings_;
   std::vector<ForceModelPtr> models_;
   std::vector<Updater> updaters_;
-  std::unique_ptr<NeighborList> nlist_;
+  Domain domain_;
+  PairTable pairs_;  // per-kind-pair table: the pair models' neighbour sub-lists
   ForceSink sink_;
   std::vector<Vec3> fd_, td_;  // damping force / torque (model dampers + local damping)
   std::vector<Vec3> f_prev_, t_prev_, fext_prev_, text_prev_;  // for work bookkeeping

@@ -1,21 +1,38 @@
 #pragma once
 // Cell list + Verlet list with a skin (half list: each pair once, j listed under i with i < j).
 // Rebuilt only when some element has moved more than half the skin since the last build.
+// Distances are minimum images in the list's domain: along a periodic axis the cell grid spans the
+// box and wraps, and a pair is listed when its minimum image is within cutoff + skin. A list may
+// hold only some pairs of element kinds (a sub-list of the pair table): elements of other kinds
+// are not even binned.
 #include <cstdint>
 #include <functional>
 #include <vector>
 
+#include "mdem/core/domain.h"
 #include "mdem/core/elements.h"
+#include "mdem/neighbor/kind_pairs.h"
 
 namespace mdem {
 
 class StateWriter;
 class StateReader;
+class ForceModel;
 
 class NeighborList {
  public:
-  // Pairs closer than cutoff + skin at build time are listed.
-  NeighborList(double cutoff, double skin);
+  // Pairs closer than cutoff + skin at build time are listed. Throws std::invalid_argument for a
+  // non-positive cutoff, a negative skin, or a periodic axis shorter than 2·(cutoff + skin).
+  NeighborList(double cutoff, double skin, Domain domain = {});
+
+  // The kind pairs listed (default: all). Pairs of other kinds are left out.
+  void set_kinds(KindPairs kinds) { kinds_ = kinds; }
+  KindPairs kinds() const { return kinds_; }
+  const Domain& domain() const { return domain_; }
+  // The pair model this list was built for (its kinds and exclusion): that model, and the models
+  // that belong to its pairs, need not filter the listed pairs again. Null: a list of any pairs.
+  void set_owner(const ForceModel* m) { owner_ = m; }
+  const ForceModel* owner() const { return owner_; }
 
   // Predicate that leaves a pair out of the list (true = exclude). Optional.
   using Exclusion = std::function<bool(const Elements&, std::size_t, std::size_t)>;
@@ -45,6 +62,9 @@ class NeighborList {
 
  private:
   double cutoff_, skin_;
+  Domain domain_;
+  KindPairs kinds_ = KindPairs::all();
+  const ForceModel* owner_ = nullptr;
   Exclusion exclusion_;
   std::vector<Vec3> x_at_build_;
   std::vector<std::uint32_t> offsets_, neighbors_;

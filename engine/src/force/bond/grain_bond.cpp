@@ -308,7 +308,11 @@ void GrainBond::load_state(StateReader& r) {
 
 GrainDashpots::GrainDashpots(double ratio, const GrainBond* bonds, double contact_youngs,
                              double max_radius)
-    : ratio_(ratio), bonds_(bonds), contact_youngs_(contact_youngs), max_radius_(max_radius) {
+    : contacts_(ratio, bonds, contact_youngs, max_radius),
+      ratio_(ratio),
+      bonds_(bonds),
+      contact_youngs_(contact_youngs),
+      max_radius_(max_radius) {
   require(std::isfinite(ratio) && ratio >= 0 && ratio <= 10,
           "grain dashpots ratio (β) must be finite and in [0, 10], got " + std::to_string(ratio));
   require(std::isfinite(contact_youngs) && contact_youngs > 0,
@@ -318,10 +322,35 @@ GrainDashpots::GrainDashpots(double ratio, const GrainBond* bonds, double contac
           "grain dashpots max_radius must be finite and > 0 nm, got " + std::to_string(max_radius));
 }
 
-bool GrainDashpots::excludes(const Elements& el, std::size_t i, std::size_t j) const {
+bool GrainContactDashpotKernel::excludes(const Elements& el, std::size_t i, std::size_t j) const {
   if (el.kind[i] != ElementKind::Grain || el.kind[j] != ElementKind::Grain) return true;
   return bonds_ && bonds_->owns(i, j);
 }
+
+bool GrainContactDashpotKernel::pair(const Elements& el, std::size_t i, std::size_t j,
+                                     const Vec3& d, PairForces& out) const {
+  const double reach = el.radius[i] + el.radius[j];
+  const double r2 = d.squaredNorm();
+  if (r2 >= reach * reach || r2 == 0) return false;
+  const Vec3 nrm = d / std::sqrt(r2);
+  const double k = grain_contact_stiffness(contact_youngs_, el.radius[i], el.radius[j]);
+  out.f2 =
+      (-dashpot_coefficient(ratio_, el.mass[i], el.mass[j], k) * nrm.dot(el.v[j] - el.v[i])) * nrm;
+  out.f1 = -out.f2;
+  return true;
+}
+
+void GrainContactDashpotKernel::stiffness(const Elements& el, std::size_t i, std::size_t j,
+                                          const Vec3& d, StiffnessSums& s) const {
+  if (d.squaredNorm() >= cutoff() * cutoff()) return;
+  const double c =
+      dashpot_coefficient(ratio_, el.mass[i], el.mass[j],
+                          grain_contact_stiffness(contact_youngs_, el.radius[i], el.radius[j]));
+  s.c[i] += c;
+  s.c[j] += c;
+}
+
+template class PairModel<GrainContactDashpotKernel>;
 
 void GrainDashpots::compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const {
   if (ratio_ == 0 || el.size() == 0) return;
@@ -334,10 +363,8 @@ void GrainDashpots::compute(const Elements& el, const NeighborList* pairs, Force
   const std::vector<GrainBondRecord>& recs = bonds_ ? bonds_->bonds() : kNone;
   const double bond_youngs = bonds_ ? bonds_->params().material.youngs : 0.0;
   const long nb = static_cast<long>(recs.size());
-  const bool have_pairs = pairs && pairs->offsets().size() == el.size() + 1;
-  const long npairs = have_pairs ? static_cast<long>(pairs->pair_count()) : 0;
   const double beta2 = 2.0 * ratio_;
-  const bool threaded = std::max({n, nb, npairs}) >= kParallelMinItems;
+  const bool threaded = std::max(n, nb) >= kParallelMinItems;
   const Vec3* x = el.x.data();
   const Vec3* v = el.v.data();
   const double* mass = el.mass.data();
@@ -349,8 +376,7 @@ void GrainDashpots::compute(const Elements& el, const NeighborList* pairs, Force
     Vec3* fd = sink.damping_force(tid);
     // −c·(n·v_rel)·n on j, the opposite on i.
     auto dashpot = [&](std::size_t i, std::size_t j, const Vec3& nrm, double k) {
-      const double m_eff = mass[i] * mass[j] / (mass[i] + mass[j]);
-      const double c = beta2 * std::sqrt(m_eff * k);
+      const double c = dashpot_coefficient(ratio_, mass[i], mass[j], k);
       const Vec3 fj = (-c * nrm.dot(v[j] - v[i])) * nrm;
       fd[j] += fj;
       fd[i] -= fj;
@@ -374,26 +400,6 @@ void GrainDashpots::compute(const Elements& el, const NeighborList* pairs, Force
       dashpot(i, j, d / r, kn);
     }
 
-    // Unbonded grain pairs in contact.
-    if (have_pairs) {
-      const auto& off = pairs->offsets();
-      const auto& nbr = pairs->neighbors();
-#pragma omp for schedule(static, 64)
-      for (long i = 0; i < n; ++i) {
-        if (el.kind[i] != ElementKind::Grain) continue;
-        for (std::uint32_t m = off[i]; m < off[i + 1]; ++m) {
-          const std::uint32_t j = nbr[m];
-          const Vec3 d = x[j] - x[i];
-          const double reach = radius[i] + radius[j];
-          const double r2 = d.squaredNorm();
-          if (r2 >= reach * reach || r2 == 0) continue;
-          if (el.kind[j] != ElementKind::Grain || (bonds_ && bonds_->owns(i, j))) continue;
-          const double r = std::sqrt(r2);
-          dashpot(i, j, d / r, grain_contact_stiffness(contact_youngs_, radius[i], radius[j]));
-        }
-      }
-    }
-
     // Grains against platens: the grain's mass, the rigid-platen stiffness π·R·E.
     if (nw > 0) {
 #pragma omp for schedule(static)
@@ -412,6 +418,10 @@ void GrainDashpots::compute(const Elements& el, const NeighborList* pairs, Force
       }
     }
   }
+
+  // Unbonded grain pairs in contact: the linear contact's pairs.
+  if (pairs && pairs->offsets().size() == el.size() + 1)
+    drive_pairs(contacts_, el, *pairs, sink, !list_is_for(*pairs, *this));
 }
 
 void GrainDashpots::add_stiffness(const Elements& el, const NeighborList* pairs,
@@ -419,8 +429,7 @@ void GrainDashpots::add_stiffness(const Elements& el, const NeighborList* pairs,
   if (ratio_ == 0) return;
   const double beta2 = 2.0 * ratio_;
   auto pair_c = [&](std::size_t i, std::size_t j, double k) {
-    const double m_eff = el.mass[i] * el.mass[j] / (el.mass[i] + el.mass[j]);
-    const double c = beta2 * std::sqrt(m_eff * k);
+    const double c = dashpot_coefficient(ratio_, el.mass[i], el.mass[j], k);
     s.c[i] += c;
     s.c[j] += c;
   };
@@ -434,18 +443,7 @@ void GrainDashpots::add_stiffness(const Elements& el, const NeighborList* pairs,
                         : rec.bond.k.kn_area);
     }
   }
-  if (pairs && pairs->offsets().size() == el.size() + 1) {
-    const auto& off = pairs->offsets();
-    const auto& nbr = pairs->neighbors();
-    const double rc2 = cutoff() * cutoff();
-    for (std::size_t i = 0; i < el.size(); ++i) {
-      for (std::uint32_t m = off[i]; m < off[i + 1]; ++m) {
-        const std::size_t j = nbr[m];
-        if ((el.x[j] - el.x[i]).squaredNorm() >= rc2 || excludes(el, i, j)) continue;
-        pair_c(i, j, grain_contact_stiffness(contact_youngs_, el.radius[i], el.radius[j]));
-      }
-    }
-  }
+  if (pairs) drive_stiffness(contacts_, el, *pairs, s, !list_is_for(*pairs, *this));
   // The platen moves as prescribed, so only the grain's row sees the dashpot.
   platens_.update(el);
   platens_.for_each_grain_near(el, [&](std::size_t i) {

@@ -36,14 +36,10 @@
 // result (so the system's guard reports it); an infinite separation reads as beyond the cutoff.
 #include "mdem/force/contact/anisotropic_vdw.h"
 
-#include <omp.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <stdexcept>
-
-#include "mdem/neighbor/neighbor_list.h"
 
 namespace mdem {
 
@@ -162,10 +158,10 @@ struct CosTheta2 {
           b.u_c + w * (a.u_c - b.u_c) + dw * (a.u - b.u)};
 }
 
-// Returns false (and leaves out untouched) beyond the cutoff.
-[[gnu::always_inline]] inline bool eval_pair(const VdwConstants& k, const Vec3& x1, const Vec3& b1,
-                                             const Vec3& x2, const Vec3& b2, VdwPairResult& out) {
-  const Vec3 rv = x2 - x1;
+// rv = x2 − x1 (the minimum image in a periodic domain). Returns false (and leaves out untouched)
+// beyond the cutoff.
+[[gnu::always_inline]] inline bool eval_pair(const VdwConstants& k, const Vec3& rv, const Vec3& b1,
+                                             const Vec3& b2, VdwPairResult& out) {
   const double R2 = rv.squaredNorm();
   if (R2 >= k.cutoff2) return false;  // (a NaN fails this test and propagates below)
   const double c = b1.dot(b2);
@@ -287,7 +283,7 @@ VdwConstants::VdwConstants(const VdwParams& params) : p(params) {
 VdwPairResult vdw_pair(const VdwConstants& k, const Vec3& x1, const Vec3& b1, const Vec3& x2,
                        const Vec3& b2) {
   VdwPairResult out;
-  eval_pair(k, x1, b1, x2, b2, out);
+  eval_pair(k, x2 - x1, b1, b2, out);
   return out;
 }
 
@@ -317,10 +313,8 @@ double vdw_radial_stiffness(const VdwParams& p, double R) {
 
 namespace {
 
-double pair_stiffness(const VdwConstants& k, const Vec3& x1, const Vec3& b1, const Vec3& x2,
-                      const Vec3& b2) {
+double pair_stiffness(const VdwConstants& k, const Vec3& rv, const Vec3& b1, const Vec3& b2) {
   const VdwParams& p = k.p;
-  const Vec3 rv = x2 - x1;
   const double R = rv.norm();
   if (!(R < p.cutoff())) return 0.0;
   const double side = radial_bound(k, R, 1.0);
@@ -335,81 +329,25 @@ double pair_stiffness(const VdwConstants& k, const Vec3& x1, const Vec3& b1, con
 
 double vdw_pair_stiffness(const VdwParams& p, const Vec3& x1, const Vec3& b1, const Vec3& x2,
                           const Vec3& b2) {
-  return pair_stiffness(VdwConstants(p), x1, b1, x2, b2);
+  return pair_stiffness(VdwConstants(p), x2 - x1, b1, b2);
 }
 
-bool AnisotropicVdw::excludes(const Elements& el, std::size_t i, std::size_t j) const {
-  return el.cnt_pair_excluded(i, j, p_.intra_tube_exclusion);
+void VdwKernel::prepare(const Elements& el, long i) const { axes_[i] = axis_of(el.q[i]); }
+
+bool VdwKernel::pair(const Elements&, std::size_t i, std::size_t j, const Vec3& d,
+                     PairForces& out) const {
+  return eval_pair(k_, d, axes_[i], axes_[j], out);
 }
 
-void AnisotropicVdw::compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const {
-  if (!pairs) throw std::logic_error("anisotropic_vdw: compute() needs a neighbour list");
-  const auto& off = pairs->offsets();
-  const auto& nb = pairs->neighbors();
-  const long n = static_cast<long>(el.size());
-  if (n == 0) return;
-  if (off.size() != el.size() + 1)
-    throw std::logic_error("anisotropic_vdw: neighbour list was not built for these elements");
-  const int excl = p_.intra_tube_exclusion;
-  const VdwConstants& k = k_;
-  const int nt = sink.threads();
-  // The pair loop is heavy: worth a team from a few thousand listed pairs on.
-  const bool threaded = static_cast<long>(pairs->pair_count()) >= 2 * kParallelMinItems;
-  axes_.resize(el.size());
-  Vec3* axes = axes_.data();
-
-#pragma omp parallel num_threads(nt) if (threaded)
-  {
-#pragma omp for schedule(static)
-    for (long i = 0; i < n; ++i) axes[i] = axis_of(el.q[i]);
-    const int tid = omp_get_thread_num();
-    Vec3* f = sink.force(tid);
-    Vec3* t = sink.torque(tid);
-    double energy = 0.0;
-#pragma omp for schedule(static, 64)
-    for (long i = 0; i < n; ++i) {
-      const std::uint32_t begin = off[i], end = off[i + 1];
-      if (begin == end || el.kind[i] != ElementKind::CntSegment) continue;
-      const Vec3 xi = el.x[i];
-      const Vec3 bi = axes[i];
-      Vec3 fi = Vec3::Zero(), ti = Vec3::Zero();
-      for (std::uint32_t m = begin; m < end; ++m) {
-        const std::uint32_t j = nb[m];
-        // The list is shared by all pair models, so this model's exclusion is applied here
-        // (a few integer compares).
-        if (el.cnt_pair_excluded(i, j, excl)) continue;
-        VdwPairResult r;
-        if (!eval_pair(k, xi, bi, el.x[j], axes[j], r)) continue;
-        energy += r.energy;
-        fi += r.f1;
-        ti += r.t1;
-        f[j] += r.f2;
-        t[j] += r.t2;
-      }
-      f[i] += fi;
-      t[i] += ti;
-    }
-    sink.energy(tid).add(EnergyTerm::Vdw, energy);
-  }
-}
-
-void AnisotropicVdw::add_stiffness(const Elements& el, const NeighborList* pairs,
-                                   StiffnessSums& s) const {
-  if (!pairs) return;
-  const auto& off = pairs->offsets();
-  const auto& nb = pairs->neighbors();
-  if (off.size() != el.size() + 1) return;
+void VdwKernel::stiffness(const Elements& el, std::size_t i, std::size_t j, const Vec3& d,
+                          StiffnessSums& s) const {
+  const double kt = pair_stiffness(k_, d, axis_of(el.q[i]), axis_of(el.q[j]));
+  if (kt <= 0.0) return;
+  // Rotational estimate: the contact acts at a lever arm of about one radius from each centre.
   const double r = p_.radius;
-  for (std::size_t i = 0; i < el.size(); ++i) {
-    for (std::uint32_t m = off[i]; m < off[i + 1]; ++m) {
-      const std::size_t j = nb[m];
-      if (excludes(el, i, j)) continue;
-      const double kt = pair_stiffness(k_, el.x[i], axis_of(el.q[i]), el.x[j], axis_of(el.q[j]));
-      if (kt <= 0.0) continue;
-      // Rotational estimate: the contact acts at a lever arm of about one radius from each centre.
-      s.add_pair(i, j, kt, kt * r * r, kt * r);
-    }
-  }
+  s.add_pair(i, j, kt, kt * r * r, kt * r);
 }
+
+template class PairModel<VdwKernel>;
 
 }  // namespace mdem

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "mdem/force/bond/parallel_bond.h"
+#include "mdem/force/pair_driver.h"
 #include "mdem/scene/grain.h"
 
 namespace mdem {
@@ -97,20 +98,51 @@ class GrainBond final : public ForceModel {
 // intact bond and every pair in linear contact (grain–grain, post-break, grain–platen), a force
 // −c·(n·v_rel)·n along the centre line (the platen normal), c = 2β√(m_eff·k_n) with the pair's
 // normal stiffness and reduced mass (the grain's mass against a platen).
+// The pair part of GrainDashpots (pair_driver.h): unbonded Grain–Grain pairs in contact, the
+// pairs of the linear contact it belongs to.
+class GrainContactDashpotKernel {
+ public:
+  static constexpr bool kDissipative = true;
+  static constexpr bool kTorques = false;
+  static constexpr EnergyTerm kTerm = EnergyTerm::Contact;  // unused: dissipative
+
+  GrainContactDashpotKernel(double ratio, const GrainBond* bonds, double contact_youngs,
+                            double max_radius)
+      : ratio_(ratio), bonds_(bonds), contact_youngs_(contact_youngs), max_radius_(max_radius) {}
+  std::string_view name() const { return "grain_dashpots"; }
+  std::string_view owner() const { return "linear_contact"; }
+  double cutoff() const { return 2.0 * max_radius_; }
+  KindPairs kinds() const { return KindPairs::of(ElementKind::Grain, ElementKind::Grain); }
+  bool excludes(const Elements& el, std::size_t i, std::size_t j) const;
+  bool pair(const Elements& el, std::size_t i, std::size_t j, const Vec3& d, PairForces& out) const;
+  void stiffness(const Elements& el, std::size_t i, std::size_t j, const Vec3& d,
+                 StiffnessSums& s) const;
+
+ private:
+  double ratio_;
+  const GrainBond* bonds_;
+  double contact_youngs_, max_radius_;
+};
+
 class GrainDashpots final : public ForceModel {
  public:
   // bonds: the bond model (its intact bonds and broken pairs); contact_youngs: E of the linear
   // contacts; max_radius: largest grain radius.
   GrainDashpots(double ratio, const GrainBond* bonds, double contact_youngs, double max_radius);
   std::string_view name() const override { return "grain_dashpots"; }
-  double cutoff() const override { return 2.0 * max_radius_; }
+  double cutoff() const override { return contacts_.cutoff(); }
+  KindPairs kinds() const override { return contacts_.kinds(); }
+  std::string_view pair_owner() const override { return contacts_.owner(); }
   bool dissipative() const override { return true; }
-  bool excludes(const Elements& el, std::size_t i, std::size_t j) const override;
+  bool excludes(const Elements& el, std::size_t i, std::size_t j) const override {
+    return contacts_.excludes(el, i, j);
+  }
   void compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const override;
   void add_stiffness(const Elements& el, const NeighborList* pairs,
                      StiffnessSums& s) const override;
 
  private:
+  GrainContactDashpotKernel contacts_;
   double ratio_;
   const GrainBond* bonds_;
   double contact_youngs_, max_radius_;

@@ -7,7 +7,7 @@
 #include <array>
 #include <vector>
 
-#include "mdem/force/force_model.h"
+#include "mdem/force/pair_driver.h"
 
 namespace mdem {
 
@@ -49,10 +49,7 @@ struct VdwParams {
 
 // Energy and generalized forces of one segment pair. f1, f2 forces (eV/nm), t1, t2 torques (eV)
 // on segment 1 and 2; zero beyond the cutoff.
-struct VdwPairResult {
-  double energy = 0;
-  Vec3 f1 = Vec3::Zero(), f2 = Vec3::Zero(), t1 = Vec3::Zero(), t2 = Vec3::Zero();
-};
+using VdwPairResult = PairForces;
 
 // x1, x2 centres; b1, b2 unit axes (either sign: the model flips b2 so b1·b2 ≥ 0, which makes U
 // jump where b1·b2 changes sign unless the centre line is perpendicular to an axis — a property
@@ -93,15 +90,28 @@ struct VdwConstants {
 VdwPairResult vdw_pair(const VdwConstants& k, const Vec3& x1, const Vec3& b1, const Vec3& x2,
                        const Vec3& b2);
 
-class AnisotropicVdw final : public ForceModel {
+// The CNT–CNT vdW pair kernel (pair_driver.h): CntSegment–CntSegment pairs outside the
+// intra-tube exclusion; the segment axes are computed once per evaluation, not once per pair.
+class VdwKernel {
  public:
-  explicit AnisotropicVdw(VdwParams p = {}) : p_(p), k_(p) {}
-  std::string_view name() const override { return "anisotropic_vdw"; }
-  double cutoff() const override { return p_.cutoff(); }
-  bool excludes(const Elements& el, std::size_t i, std::size_t j) const override;
-  void compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const override;
-  void add_stiffness(const Elements& el, const NeighborList* pairs,
-                     StiffnessSums& s) const override;
+  static constexpr bool kDissipative = false;
+  static constexpr bool kTorques = true;
+  static constexpr EnergyTerm kTerm = EnergyTerm::Vdw;
+
+  explicit VdwKernel(VdwParams p = {}) : p_(p), k_(p) {}
+  std::string_view name() const { return "anisotropic_vdw"; }
+  double cutoff() const { return p_.cutoff(); }
+  KindPairs kinds() const {
+    return KindPairs::of(ElementKind::CntSegment, ElementKind::CntSegment);
+  }
+  bool excludes(const Elements& el, std::size_t i, std::size_t j) const {
+    return el.cnt_pair_excluded(i, j, p_.intra_tube_exclusion);
+  }
+  void begin(const Elements& el) const { axes_.resize(el.size()); }
+  void prepare(const Elements& el, long i) const;
+  bool pair(const Elements& el, std::size_t i, std::size_t j, const Vec3& d, PairForces& out) const;
+  void stiffness(const Elements& el, std::size_t i, std::size_t j, const Vec3& d,
+                 StiffnessSums& s) const;
   const VdwParams& params() const { return p_; }
 
  private:
@@ -109,6 +119,15 @@ class AnisotropicVdw final : public ForceModel {
   VdwConstants k_;
   // Segment axes of the current evaluation, computed once per step rather than once per pair.
   mutable std::vector<Vec3> axes_;
+};
+
+// Instantiated in anisotropic_vdw.cpp, where the kernel's pair() inlines into the driver's loop.
+extern template class PairModel<VdwKernel>;
+
+class AnisotropicVdw final : public PairModel<VdwKernel> {
+ public:
+  explicit AnisotropicVdw(VdwParams p = {}) : PairModel<VdwKernel>(p) {}
+  const VdwParams& params() const { return k_.params(); }
 };
 
 }  // namespace mdem

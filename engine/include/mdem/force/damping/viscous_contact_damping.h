@@ -1,7 +1,11 @@
 #pragma once
-// Viscous dashpots in CNT–CNT vdW contacts (thesis Eq. 33–34, model.md §4): on every pair within
-// the vdW cutoff, a force −c·(n·v_rel)·n along the centre line n, c = 2ψ√(m_eff k), m_eff the
-// pair's reduced mass.
+// Viscous dashpots in CNT–CNT vdW contacts (thesis Eq. 33–34, model.md §4): on every pair of the
+// vdW contact within the cutoff, a force −c·(n·v_rel)·n along the centre line n,
+// c = 2ψ√(m_eff k), m_eff the pair's reduced mass.
+//
+// The dashpot belongs to the vdW contact (pair_owner() "anisotropic_vdw"): it acts on exactly
+// that contact's CntSegment–CntSegment pairs, never on pairs of other kinds (a nanoparticle next
+// to a tube gets no CNT dashpot). Without a vdW contact in the system it lists those pairs itself.
 //
 // Only the normal dashpot: the thesis's shear dashpot on the relative centre velocity damps a
 // rigid rotation (a rope turning as a whole meets a drag growing with the pair distance), and on
@@ -9,7 +13,7 @@
 // every spin (unstable at the default step). A force along the centre line, as DPD's dissipative
 // force, leaves every rigid motion undamped and conserves linear and angular momentum; sliding
 // is still damped through the many pairs at oblique angles.
-#include "mdem/force/force_model.h"
+#include "mdem/force/pair_driver.h"
 
 namespace mdem {
 
@@ -20,21 +24,42 @@ struct ContactDampingParams {
   int intra_tube_exclusion = 20;  // same meaning as VdwParams::intra_tube_exclusion
 };
 
-class ViscousContactDamping final : public ForceModel {
+// The dashpot pair kernel (pair_driver.h).
+class ContactDampingKernel {
  public:
-  explicit ViscousContactDamping(ContactDampingParams p);
-  std::string_view name() const override { return "viscous_contact_damping"; }
-  double cutoff() const override { return p_.cutoff; }
-  bool dissipative() const override { return true; }
-  bool excludes(const Elements& el, std::size_t i, std::size_t j) const override;
-  void compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const override;
-  void add_stiffness(const Elements& el, const NeighborList* pairs,
-                     StiffnessSums& s) const override;
+  static constexpr bool kDissipative = true;
+  static constexpr bool kTorques = false;
+  static constexpr EnergyTerm kTerm = EnergyTerm::Vdw;  // unused: dissipative
+
+  // Throws std::invalid_argument for a ratio outside [0, 10], a non-positive stiffness or cutoff,
+  // or a negative exclusion.
+  explicit ContactDampingKernel(ContactDampingParams p);
+  std::string_view name() const { return "viscous_contact_damping"; }
+  std::string_view owner() const { return "anisotropic_vdw"; }
+  bool active() const { return p_.ratio != 0; }
+  double cutoff() const { return p_.cutoff; }
+  KindPairs kinds() const {
+    return KindPairs::of(ElementKind::CntSegment, ElementKind::CntSegment);
+  }
+  bool excludes(const Elements& el, std::size_t i, std::size_t j) const {
+    return el.cnt_pair_excluded(i, j, p_.intra_tube_exclusion);
+  }
+  bool pair(const Elements& el, std::size_t i, std::size_t j, const Vec3& d, PairForces& out) const;
+  void stiffness(const Elements& el, std::size_t i, std::size_t j, const Vec3& d,
+                 StiffnessSums& s) const;
   const ContactDampingParams& params() const { return p_; }
 
  private:
   double coefficient(const Elements& el, std::size_t i, std::size_t j) const;
   ContactDampingParams p_;
+};
+
+extern template class PairModel<ContactDampingKernel>;
+
+class ViscousContactDamping final : public PairModel<ContactDampingKernel> {
+ public:
+  explicit ViscousContactDamping(ContactDampingParams p) : PairModel<ContactDampingKernel>(p) {}
+  const ContactDampingParams& params() const { return k_.params(); }
 };
 
 }  // namespace mdem

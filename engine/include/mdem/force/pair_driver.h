@@ -1,0 +1,209 @@
+#pragma once
+// One driver for every pair model (HOOMD-blue's generic pair driver over small evaluators).
+//
+// A pair model is a *kernel*: its parameters and the physics of one pair, with no loop and no
+// threading. The driver runs a kernel over its neighbour sub-list: threaded over the elements i,
+// each thread writing into its own ForceSink slot (schedule fixed, so the summation order, and
+// the result, are the same run to run at a fixed thread count), with the displacement of every
+// pair taken from the list's domain (minimum image along periodic axes).
+//
+// A kernel K provides:
+//   static constexpr bool kDissipative;   // velocity-dependent: writes the sink's damping slots
+//   static constexpr bool kTorques;       // writes torques
+//   static constexpr EnergyTerm kTerm;    // where the stored energy is booked (conservative)
+//   std::string_view name() const;
+//   double cutoff() const;                // nm, > 0
+//   KindPairs kinds() const;              // the pairs of element kinds it acts on
+//   bool excludes(const Elements&, i, j) const;  // kinds outside kinds(), topology exclusions
+//   bool pair(const Elements&, i, j, const Vec3& d, PairForces& out) const;
+//       // d = minimum-image x_j − x_i; fills out (forces and torques on i = 1 and j = 2, energy)
+//       // and returns true, or returns false when the pair does not interact (beyond reach)
+//   void stiffness(const Elements&, i, j, const Vec3& d, StiffnessSums&) const;
+// and optionally:
+//   std::string_view owner() const;       // the contact whose pairs a dashpot belongs to
+//   bool active() const;                  // false: the model does nothing (a zero damping ratio)
+//   void begin(const Elements&) const;    // per evaluation, serial (size a per-step cache)
+//   void prepare(const Elements&, long i) const;  // per evaluation and element, threaded
+// PairModel<K> makes a ForceModel of it.
+#include <omp.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "mdem/force/force_model.h"
+#include "mdem/neighbor/neighbor_list.h"
+
+namespace mdem {
+
+// Forces f1, f2 and torques t1, t2 on the pair's elements i (1) and j (2), and its energy.
+struct PairForces {
+  double energy = 0;
+  Vec3 f1 = Vec3::Zero(), f2 = Vec3::Zero(), t1 = Vec3::Zero(), t2 = Vec3::Zero();
+};
+
+// Coefficient c = 2·ratio·√(m_eff·k) of a viscous dashpot between masses mi and mj (m_eff their
+// reduced mass) in a contact of normal stiffness k: critical damping times the ratio.
+inline double dashpot_coefficient(double ratio, double mi, double mj, double k) {
+  return 2.0 * ratio * std::sqrt(mi * mj / (mi + mj) * k);
+}
+
+namespace pair_driver_detail {
+
+template <bool kPeriodic>
+inline Vec3 displacement(const Domain& domain, const Vec3& xi, const Vec3& xj) {
+  if constexpr (kPeriodic)
+    return domain.delta(xi, xj);
+  else
+    return xj - xi;
+}
+
+template <bool kPeriodic, bool kFilter, class K>
+void run(const K& k, const Elements& el, const NeighborList& list, ForceSink& sink, bool threaded) {
+  const auto& off = list.offsets();
+  const auto& nb = list.neighbors();
+  const Domain& domain = list.domain();
+  const long n = static_cast<long>(el.size());
+#pragma omp parallel num_threads(sink.threads()) if (threaded)
+  {
+    if constexpr (requires { k.prepare(el, 0L); }) {
+#pragma omp for schedule(static)
+      for (long i = 0; i < n; ++i) k.prepare(el, i);
+    }
+    const int tid = omp_get_thread_num();
+    Vec3* f = K::kDissipative ? sink.damping_force(tid) : sink.force(tid);
+    Vec3* t = K::kDissipative ? sink.damping_torque(tid) : sink.torque(tid);
+    double energy = 0.0;
+#pragma omp for schedule(static, 64)
+    for (long i = 0; i < n; ++i) {
+      const std::uint32_t begin = off[i], end = off[i + 1];
+      if (begin == end) continue;
+      const Vec3 xi = el.x[i];
+      Vec3 fi = Vec3::Zero(), ti = Vec3::Zero();
+      for (std::uint32_t m = begin; m < end; ++m) {
+        const std::uint32_t j = nb[m];
+        if constexpr (kFilter) {
+          if (k.excludes(el, i, j)) continue;
+        }
+        PairForces r;
+        if (!k.pair(el, i, j, displacement<kPeriodic>(domain, xi, el.x[j]), r)) continue;
+        if constexpr (!K::kDissipative) energy += r.energy;
+        fi += r.f1;
+        f[j] += r.f2;
+        if constexpr (K::kTorques) {
+          ti += r.t1;
+          t[j] += r.t2;
+        }
+      }
+      f[i] += fi;
+      if constexpr (K::kTorques) t[i] += ti;
+    }
+    if constexpr (!K::kDissipative) sink.energy(tid).add(K::kTerm, energy);
+  }
+}
+
+}  // namespace pair_driver_detail
+
+// Adds kernel k's forces, torques and energy over the pairs of `list` to the sink. filter: test
+// k.excludes() on every listed pair (when the list was not built for this kernel's pairs).
+template <class K>
+void drive_pairs(const K& k, const Elements& el, const NeighborList& list, ForceSink& sink,
+                 bool filter) {
+  if (el.size() == 0) return;
+  if (list.offsets().size() != el.size() + 1)
+    throw std::logic_error(std::string(k.name()) +
+                           ": neighbour list was not built for these elements");
+  if (K::kDissipative && !sink.has_damping())
+    throw std::logic_error(std::string(k.name()) + ": force sink has no damping buffers");
+  if constexpr (requires { k.begin(el); }) k.begin(el);
+  // The pair loop is heavy: worth a team from a few thousand listed pairs on.
+  const bool threaded = static_cast<long>(list.pair_count()) >= 2 * kParallelMinItems;
+  using namespace pair_driver_detail;
+  const bool periodic = list.domain().any_periodic();
+  if (periodic) {
+    if (filter)
+      run<true, true>(k, el, list, sink, threaded);
+    else
+      run<true, false>(k, el, list, sink, threaded);
+  } else {
+    if (filter)
+      run<false, true>(k, el, list, sink, threaded);
+    else
+      run<false, false>(k, el, list, sink, threaded);
+  }
+}
+
+// Adds kernel k's stiffness bounds over the pairs of `list` (serial, in list order).
+template <class K>
+void drive_stiffness(const K& k, const Elements& el, const NeighborList& list, StiffnessSums& s,
+                     bool filter) {
+  const auto& off = list.offsets();
+  const auto& nb = list.neighbors();
+  if (off.size() != el.size() + 1) return;
+  const Domain& domain = list.domain();
+  for (std::size_t i = 0; i < el.size(); ++i)
+    for (std::uint32_t m = off[i]; m < off[i + 1]; ++m) {
+      const std::size_t j = nb[m];
+      if (filter && k.excludes(el, i, j)) continue;
+      k.stiffness(el, i, j, domain.delta(el.x[i], el.x[j]), s);
+    }
+}
+
+// Whether `list` holds exactly m's pairs (built for m, or for the contact m belongs to), so the
+// driver need not test m's exclusion on each listed pair again.
+inline bool list_is_for(const NeighborList& list, const ForceModel& m) {
+  const ForceModel* o = list.owner();
+  if (!o) return false;
+  if (o == &m) return true;
+  const std::string_view owner = m.pair_owner();
+  return !owner.empty() && o->name() == owner;
+}
+
+// A ForceModel made of a pair kernel: everything a pair model is, from its one-pair physics.
+template <class K>
+class PairModel : public ForceModel {
+ public:
+  template <class... A>
+  explicit PairModel(A&&... a) : k_(std::forward<A>(a)...) {}
+
+  std::string_view name() const override { return k_.name(); }
+  double cutoff() const override { return k_.cutoff(); }
+  KindPairs kinds() const override { return k_.kinds(); }
+  bool excludes(const Elements& el, std::size_t i, std::size_t j) const override {
+    return k_.excludes(el, i, j);
+  }
+  bool dissipative() const override { return K::kDissipative; }
+  std::string_view pair_owner() const override {
+    if constexpr (requires { k_.owner(); })
+      return k_.owner();
+    else
+      return {};
+  }
+
+  void compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const override {
+    if (!active()) return;
+    if (!pairs) throw std::logic_error(std::string(name()) + ": compute() needs a neighbour list");
+    drive_pairs(k_, el, *pairs, sink, !list_is_for(*pairs, *this));
+  }
+  void add_stiffness(const Elements& el, const NeighborList* pairs,
+                     StiffnessSums& s) const override {
+    if (!active() || !pairs) return;
+    drive_stiffness(k_, el, *pairs, s, !list_is_for(*pairs, *this));
+  }
+
+  const K& kernel() const { return k_; }
+
+ protected:
+  K k_;
+
+ private:
+  bool active() const {
+    if constexpr (requires { k_.active(); })
+      return k_.active();
+    else
+      return true;
+  }
+};
+
+}  // namespace mdem
