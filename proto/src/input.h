@@ -1,5 +1,7 @@
 #pragma once
 // Shared by the JSON, YAML and file readers.
+#include <google/protobuf/descriptor.h>
+
 #include <cstddef>
 #include <functional>
 #include <string>
@@ -28,6 +30,11 @@ mdem::v1::JobSpec parse_json_as(std::string_view json, const std::string& field,
 // beyond a double. Throws a SpecError under `field` for the first problem, naming the field path
 // as written, where it is (through `locate`), what is wrong and what is allowed.
 void check_json(std::string_view json, const std::string& field, const Locate& locate);
+
+// The field a key names, as the JSON mapping reads it: proto name or JSON (lowerCamel) name;
+// nullptr for none.
+const google::protobuf::FieldDescriptor* field_named(const google::protobuf::Descriptor& message,
+                                                     const std::string& key);
 
 // Refuses text over kMaxSpecBytes with a SpecError under `field`.
 void check_size(std::size_t bytes, const std::string& field, const std::string& what);

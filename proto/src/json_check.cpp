@@ -52,14 +52,6 @@ class TrackedChars {
   const char** read_;
 };
 
-// The field a key names, as the JSON mapping reads it: proto name or JSON (lowerCamel) name.
-const FieldDescriptor* field_named(const Descriptor& message, const std::string& key) {
-  if (const FieldDescriptor* field = message.FindFieldByName(key)) return field;
-  for (int i = 0; i < message.field_count(); ++i)
-    if (message.field(i)->json_name() == key) return message.field(i);
-  return nullptr;
-}
-
 std::string field_names(const Descriptor& message) {
   std::string names;
   for (int i = 0; i < message.field_count(); ++i)
@@ -477,6 +469,13 @@ class SchemaCheck : public nlohmann::json_sax<nlohmann::json> {
 };
 
 }  // namespace
+
+const FieldDescriptor* field_named(const Descriptor& message, const std::string& key) {
+  if (const FieldDescriptor* field = message.FindFieldByName(key)) return field;
+  for (int i = 0; i < message.field_count(); ++i)
+    if (message.field(i)->json_name() == key) return message.field(i);
+  return nullptr;
+}
 
 std::string text_location(std::string_view text, std::size_t offset) {
   std::size_t line = 1;

@@ -118,17 +118,9 @@ struct Slot {
   bool text = false;
 };
 
-// The field a key names, as the JSON mapping reads it: proto name or JSON (lowerCamel) name.
-const FieldDescriptor* field_named(const Descriptor& message, const std::string& key) {
-  if (const FieldDescriptor* field = message.FindFieldByName(key)) return field;
-  for (int i = 0; i < message.field_count(); ++i)
-    if (message.field(i)->json_name() == key) return message.field(i);
-  return nullptr;
-}
-
 Slot slot_of(const Descriptor* message, const std::string& key) {
   if (message == nullptr) return {};
-  const FieldDescriptor* field = field_named(*message, key);
+  const FieldDescriptor* field = detail::field_named(*message, key);
   if (field == nullptr) return {};  // the JSON mapping reports the unknown field
   const bool text =
       field->type() == FieldDescriptor::TYPE_STRING || field->type() == FieldDescriptor::TYPE_BYTES;
