@@ -75,7 +75,8 @@ FlagSpec spec_flag_spec(const SpecKind& kind) {
   return fs;
 }
 
-v1::JobSpec spec_from_flags(const SpecKind& kind, const FlagValues& given) {
+v1::JobSpec spec_from_flags(const SpecKind& kind, const FlagValues& given,
+                            const spec::KindRulesRegistry& rules) {
   v1::JobSpec spec;
   if (given.count("--spec")) spec = spec::load_file(given.at("--spec"));
   if (spec.kind_case() != kind.kind_case && spec.kind_case() != v1::JobSpec::KIND_NOT_SET)
@@ -83,7 +84,7 @@ v1::JobSpec spec_from_flags(const SpecKind& kind, const FlagValues& given) {
                      ")");
   apply_common_flags(given, spec);
   kind.apply_flags(given, spec);
-  return spec::finalize(spec);
+  return spec::finalize(spec, rules);
 }
 
 std::string describe_spec_error(const spec::SpecError& e) {

@@ -15,6 +15,7 @@
 #include "mdem/job/job.h"
 #include "mdem/kind_registry.h"
 #include "mdem/spec.h"
+#include "mdem/spec_kinds.h"
 #include "mdem/v1/job.pb.h"
 
 namespace mdem::cli {
@@ -78,7 +79,8 @@ std::string spec_kind_names();
 FlagSpec spec_flag_spec(const SpecKind& kind);
 // The finalized spec of parsed flags: --spec FILE (if given), the flags over it, then
 // spec::finalize. Throws UsageError (a bad flag, a file of another kind) or spec::SpecError.
-v1::JobSpec spec_from_flags(const SpecKind& kind, const FlagValues& given);
+v1::JobSpec spec_from_flags(const SpecKind& kind, const FlagValues& given,
+                            const spec::KindRulesRegistry& rules = spec::kind_rules());
 
 // A spec error as usage lines: each field, the flag that sets it, and what is allowed.
 std::string describe_spec_error(const spec::SpecError& e);

@@ -8,8 +8,8 @@ long steps_needed(Job& job) {
   return std::max(1L, static_cast<long>(std::ceil(job.duration() / job.system().dt() - 1e-9)));
 }
 
-JobRunner::JobRunner(const v1::JobSpec& spec, int threads)
-    : spec_(spec), job_(make_spec_job(spec, threads)) {}
+JobRunner::JobRunner(const v1::JobSpec& spec, int threads, const JobKindRegistry& kinds)
+    : spec_(spec), kind_(kinds.of(spec)), job_(make_spec_job(spec, threads, kinds)) {}
 
 JobOutcome JobRunner::run(const JobObserver& observer,
                           const std::function<std::string(Job&)>& cancel_reason) {
@@ -34,7 +34,8 @@ JobOutcome JobRunner::run(const JobObserver& observer,
 
 ReportJson JobRunner::report(const std::string& job_id, const JobOutcome& outcome,
                              double wall_before) const {
-  return job_report(*job_, job_id, outcome.state, outcome.reason, wall_before + outcome.wall_s);
+  return job_report(*job_, *kind_, job_id, outcome.state, outcome.reason,
+                    wall_before + outcome.wall_s);
 }
 
 }  // namespace mdem

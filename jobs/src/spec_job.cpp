@@ -78,21 +78,35 @@ ReportJson performance_json(const System& sys, double wall_s) {
   return perf;
 }
 
-ReportJson job_report(Job& job, const std::string& job_id, JobState state,
-                      const std::string& reason, double wall_s) {
+namespace {
+
+ReportJson report(Job& job, const std::string& kind, const SummaryLayout& layout,
+                  const std::string& job_id, JobState state, const std::string& reason,
+                  double wall_s) {
   const bool failed = state == v1::FAILED;
-  const std::string kind(job.kind());
-  const SummaryLayout* layout = summary_layout(kind);
   ReportJson doc;
   doc["job_id"] = job_id;
   doc["kind"] = kind;
   doc["state"] = job_state_name(state);
   if (!reason.empty()) doc["reason"] = reason;
-  doc["summary"] = failed ? ReportJson::object()
-                          : summary_json(layout ? *layout : SummaryLayout{}, job.summary());
+  doc["summary"] = failed ? ReportJson::object() : summary_json(layout, job.summary());
   doc["accuracy"] = accuracy_json(job.system(), !failed);
   doc["performance"] = performance_json(job.system(), wall_s);
   return doc;
+}
+
+}  // namespace
+
+ReportJson job_report(Job& job, const std::string& job_id, JobState state,
+                      const std::string& reason, double wall_s) {
+  const std::string kind(job.kind());
+  const SummaryLayout* layout = summary_layout(kind);
+  return report(job, kind, layout ? *layout : SummaryLayout{}, job_id, state, reason, wall_s);
+}
+
+ReportJson job_report(Job& job, const JobKind& kind, const std::string& job_id, JobState state,
+                      const std::string& reason, double wall_s) {
+  return report(job, kind.name, kind.summary, job_id, state, reason, wall_s);
 }
 
 }  // namespace mdem

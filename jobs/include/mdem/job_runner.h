@@ -9,6 +9,7 @@
 #include <string>
 
 #include "mdem/job/job.h"
+#include "mdem/job_kinds.h"
 #include "mdem/job_state.h"
 #include "mdem/spec_job.h"
 #include "mdem/v1/job.pb.h"
@@ -28,9 +29,11 @@ struct JobOutcome {
 
 class JobRunner {
  public:
-  // Builds the job (make_spec_job); threads > 0 overrides the spec's. Throws what building
-  // throws (std::invalid_argument for an impossible scene or load).
-  explicit JobRunner(const v1::JobSpec& spec, int threads = 0);
+  // Builds the job with the spec's kind in `kinds` (make_spec_job); threads > 0 overrides the
+  // spec's. Throws what building throws (std::invalid_argument for an impossible scene or load,
+  // or a kind `kinds` does not hold).
+  explicit JobRunner(const v1::JobSpec& spec, int threads = 0,
+                     const JobKindRegistry& kinds = job_kinds());
 
   Job& job() { return *job_; }
   const v1::JobSpec& spec() const { return spec_; }
@@ -47,6 +50,7 @@ class JobRunner {
 
  private:
   v1::JobSpec spec_;
+  const JobKind* kind_;
   std::unique_ptr<Job> job_;
 };
 

@@ -53,5 +53,8 @@ ReportJson accuracy_json(const System& sys, bool with_balance);
 ReportJson performance_json(const System& sys, double wall_s);
 ReportJson job_report(Job& job, const std::string& job_id, JobState state,
                       const std::string& reason, double wall_s);
+// The same for a job of `kind` (its name and summary layout), which need not be in job_kinds().
+ReportJson job_report(Job& job, const JobKind& kind, const std::string& job_id, JobState state,
+                      const std::string& reason, double wall_s);
 
 }  // namespace mdem

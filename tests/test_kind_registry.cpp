@@ -1,0 +1,225 @@
+// The kind registries (issue 12 item 6): a kind registered in each layer's registry flows from
+// flags through validation, the job factory and the runner to its declared summary, with no
+// switch edited; every declared summary value of the built-in kinds reaches the report's JSON and
+// the printer; job states are one enum.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "../client/src/console.h"
+#include "../client/src/spec_flags.h"
+#include "mdem/core/units.h"
+#include "mdem/job/twist_job.h"
+#include "mdem/job_kinds.h"
+#include "mdem/job_runner.h"
+#include "mdem/job_state.h"
+#include "mdem/spec.h"
+#include "mdem/spec_kinds.h"
+#include "mdem/spec_rules.h"
+
+namespace {
+
+using mdem::JobKind;
+using mdem::SummaryField;
+namespace v1 = mdem::v1;
+namespace spec = mdem::spec;
+
+// ---- a stand-in kind, "dummy", registered only in this test's own registries ----
+// Protobuf's oneof is fixed when job.proto is compiled, so the stand-in keeps its settings in
+// the TwistSpec message (a real new kind adds its own message and oneof field to job.proto).
+// Everything else is its own: its rules (only 2 layers, a short hold), its factory, its flag
+// table and its summary layout.
+
+constexpr spec::Range kDummyLayers = spec::closed(2, 2, "layers", "the dummy rope has two");
+
+spec::KindRules dummy_rules() {
+  return {"dummy", v1::JobSpec::kTwist,
+          [](v1::JobSpec& s) {
+            v1::TwistSpec& t = *s.mutable_twist();
+            if (!t.has_layers()) t.set_layers(2);
+            if (!t.has_length_nm()) t.set_length_nm(4 * spec::kSegmentNm);
+          },
+          [](const v1::JobSpec& s, spec::Checks& checks) {
+            checks.integer("dummy.layers", s.twist().has_layers(), s.twist().layers(),
+                           kDummyLayers);
+          }};
+}
+
+JobKind dummy_job_kind() {
+  JobKind k;
+  k.name = "dummy";
+  k.kind_case = v1::JobSpec::kTwist;
+  k.build = [](const v1::JobSpec& s, const mdem::IntegratorSettings& settings) {
+    mdem::TwistJobSpec job;
+    job.rope.layers = s.twist().layers();
+    job.rope.segments = static_cast<int>(std::lround(s.twist().length_nm() / spec::kSegmentNm));
+    job.loading.torque_max = mdem::units::nNnm(0.5);
+    job.loading.rate = mdem::units::nNnm(5.0);
+    job.loading.hold = 0.2;
+    return std::unique_ptr<mdem::Job>(std::make_unique<mdem::TwistJob>(job, settings));
+  };
+  k.local_damping = [](const v1::JobSpec&) { return 0.2; };
+  k.element_bound = [](const v1::JobSpec& s) { return 7L * 4; };
+  k.summary = {
+      {"elements", SummaryField::Type::Count, "", "pieces", 1, 6, true},
+      {"rope_radius_nm", SummaryField::Type::Real, "nm", "dummy radius", 2, 4, false},
+  };
+  return k;
+}
+
+const mdem::cli::FlagFields& dummy_flag_fields() {
+  static const mdem::cli::FlagFields f = {{"--size", "twist.layers"}};
+  return f;
+}
+
+mdem::cli::SpecKind dummy_cli_kind() {
+  return {"dummy",
+          v1::JobSpec::kTwist,
+          dummy_flag_fields,
+          {},
+          [](const mdem::cli::FlagValues& f, v1::JobSpec& s) {
+            s.mutable_twist();
+            if (f.count("--size"))
+              s.mutable_twist()->set_layers(mdem::cli::spec_int("--size", f.at("--size")));
+          },
+          "A stand-in kind.\n",
+          "Dummy:\n  --size N   layers\n",
+          [](mdem::Job&, const v1::JobSpec&) { return std::string(); },
+          [](const v1::JobSpec&) { return std::string(); }};
+}
+
+TEST(KindRegistry, AStandInKindFlowsFromFlagsToItsPrintedSummary) {
+  spec::KindRulesRegistry rules = {dummy_rules()};
+  mdem::JobKindRegistry jobs = {dummy_job_kind()};
+  mdem::cli::SpecKindRegistry cli = {dummy_cli_kind()};
+  const mdem::cli::SpecKind& kind = *cli.find("dummy");
+
+  // Validation: the stand-in's own rule, under its own field name; the built-in twist rules
+  // (2..10 layers) would have accepted 3.
+  try {
+    mdem::cli::spec_from_flags(kind, {{"--size", "3"}, {"--threads", "1"}}, rules);
+    FAIL() << "3 layers passed the dummy's rules";
+  } catch (const spec::SpecError& e) {
+    ASSERT_EQ(e.errors().size(), 1u) << e.what();
+    EXPECT_EQ(e.errors()[0].field, "dummy.layers");
+    EXPECT_NE(e.errors()[0].message.find("the dummy rope has two"), std::string::npos);
+  }
+  EXPECT_NO_THROW(spec::finalize(
+      mdem::cli::spec_from_flags(*mdem::cli::find_spec_kind("twist"), {{"--layers", "3"}})));
+
+  // Defaults from the stand-in's rules; the factory of its registry builds and runs it.
+  const v1::JobSpec s = mdem::cli::spec_from_flags(
+      kind, {{"--threads", "1"}, {"--energy-every", "0.1"}, {"--snapshot-every", "0"}}, rules);
+  EXPECT_EQ(s.twist().layers(), 2);
+  EXPECT_EQ(jobs.of(s)->element_bound(s), 28);
+  mdem::JobRunner runner(s, 1, jobs);
+  EXPECT_EQ(runner.job().system().elements().size(), 7u * 4u);  // 7 tubes x 4 segments
+  const mdem::JobOutcome outcome = runner.run({}, nullptr);
+  ASSERT_EQ(outcome.state, v1::SUCCEEDED) << outcome.reason;
+  const mdem::ReportJson doc = runner.report("j-dummy", outcome);
+  EXPECT_EQ(doc["kind"], "dummy");
+  EXPECT_EQ(doc["state"], "SUCCEEDED");
+  // The summary in the declared order, the declared values first.
+  const auto& summary = doc["summary"];
+  ASSERT_GE(summary.size(), 2u);
+  EXPECT_EQ(summary.begin().key(), "elements");
+  EXPECT_EQ(std::next(summary.begin()).key(), "rope_radius_nm");
+  EXPECT_EQ(summary["elements"], 28);
+  // Printed from the layout: labels, units, the declared precision (4 digits).
+  const std::vector<std::string> lines = mdem::summary_lines(jobs.find("dummy")->summary, summary);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_EQ(lines[0], "pieces 28");
+  char radius[32];
+  std::snprintf(radius, sizeof radius, "%.4g", summary["rope_radius_nm"].get<double>());
+  EXPECT_EQ(lines[1], std::string("dummy radius ") + radius + " nm");
+  EXPECT_EQ(mdem::summary_highlights(jobs.find("dummy")->summary, summary),
+            std::vector<std::string>{"28 pieces"});
+
+  // A registry refuses a kind twice (by name or by oneof case).
+  EXPECT_THROW(jobs.add(dummy_job_kind()), std::logic_error);
+  JobKind other = dummy_job_kind();
+  other.name = "other";
+  EXPECT_THROW(jobs.add(other), std::logic_error);
+}
+
+// Every built-in kind has its entry in each layer, under the same name and oneof case.
+TEST(KindRegistry, EveryKindIsRegisteredInEveryLayer) {
+  const auto& rules = spec::kind_rules().all();
+  const auto& jobs = mdem::job_kinds().all();
+  const auto& cli = mdem::cli::spec_kinds().all();
+  ASSERT_EQ(rules.size(), jobs.size());
+  ASSERT_EQ(rules.size(), cli.size());
+  for (std::size_t i = 0; i < rules.size(); ++i) {
+    EXPECT_EQ(rules[i].name, jobs[i].name);
+    EXPECT_EQ(rules[i].name, cli[i].name);
+    EXPECT_EQ(rules[i].kind_case, jobs[i].kind_case);
+    EXPECT_EQ(rules[i].kind_case, cli[i].kind_case);
+  }
+}
+
+// Runs a small job of a built-in kind through the shared runner.
+mdem::ReportJson run_small(const std::string& kind, const std::vector<std::string>& flags) {
+  mdem::cli::FlagValues f;
+  for (std::size_t i = 0; i + 1 < flags.size(); i += 2) f[flags[i]] = flags[i + 1];
+  const v1::JobSpec s = mdem::cli::spec_from_flags(*mdem::cli::find_spec_kind(kind), f);
+  mdem::JobRunner runner(s, 1);
+  const mdem::JobOutcome o = runner.run({}, nullptr);
+  EXPECT_EQ(o.state, v1::SUCCEEDED) << o.reason;
+  return runner.report("j-" + kind, o);
+}
+
+void expect_summary_declared_and_shown(const std::string& kind, const mdem::ReportJson& doc) {
+  SCOPED_TRACE(kind);
+  const mdem::SummaryLayout& layout = *mdem::summary_layout(kind);
+  const auto& summary = doc["summary"];
+  // Every value the engine reports is declared, and every declared value is reported: the
+  // JSON holds exactly the layout's keys, in its order.
+  std::vector<std::string> keys, declared;
+  for (const auto& [k, v] : summary.items()) keys.push_back(k);
+  for (const SummaryField& f : layout) declared.push_back(f.key);
+  EXPECT_EQ(keys, declared);
+  // The printer (print_report, as `mdem run` and `mdem watch` print) shows each one with its
+  // label and unit.
+  std::ostringstream out, err;
+  mdem::cli::print_report(out, err, doc, std::nullopt);
+  for (const SummaryField& f : layout) {
+    ASSERT_TRUE(summary.contains(f.key)) << f.key;
+    const std::string shown = f.label + " " + mdem::summary_value_text(f, summary[f.key]);
+    EXPECT_NE(out.str().find(shown), std::string::npos) << shown << "\n" << out.str();
+    // Types as declared.
+    if (f.type == SummaryField::Type::Label) EXPECT_TRUE(summary[f.key].is_string()) << f.key;
+    if (f.type == SummaryField::Type::Count)
+      EXPECT_TRUE(summary[f.key].is_number_integer()) << f.key;
+    if (f.type == SummaryField::Type::Real) EXPECT_TRUE(summary[f.key].is_number()) << f.key;
+  }
+}
+
+TEST(KindRegistry, EveryDeclaredSummaryValueIsInTheJsonAndPrinted) {
+  expect_summary_declared_and_shown(
+      "twist", run_small("twist", {"--layers", "2", "--length", "8", "--torque", "1", "--hold", "1",
+                                   "--threads", "1", "--snapshot-every", "0"}));
+  expect_summary_declared_and_shown(
+      "compression",
+      run_small("compression", {"--outer-radius", "4", "--grain-radius", "1,1.5", "--peak", "1",
+                                "--speed", "0.05", "--threads", "1", "--snapshot-every", "0"}));
+}
+
+TEST(JobState, OneEnumWithNamesAndFinality) {
+  for (const v1::JobState s : {v1::QUEUED, v1::RUNNING, v1::SUCCEEDED, v1::FAILED, v1::CANCELLED})
+    EXPECT_EQ(mdem::parse_job_state(mdem::job_state_name(s)), s);
+  EXPECT_EQ(mdem::job_state_name(v1::JOB_STATE_UNSPECIFIED), "QUEUED");
+  EXPECT_FALSE(mdem::parse_job_state("DONE").has_value());
+  EXPECT_FALSE(mdem::parse_job_state("succeeded").has_value());
+  std::set<std::string> final_states;
+  for (const char* n : {"QUEUED", "RUNNING", "SUCCEEDED", "FAILED", "CANCELLED", "BOGUS"})
+    if (mdem::is_final(std::string_view(n))) final_states.insert(n);
+  EXPECT_EQ(final_states, (std::set<std::string>{"SUCCEEDED", "FAILED", "CANCELLED"}));
+}
+
+}  // namespace
