@@ -5,8 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <string>
@@ -220,6 +223,87 @@ TEST(JobState, OneEnumWithNamesAndFinality) {
   for (const char* n : {"QUEUED", "RUNNING", "SUCCEEDED", "FAILED", "CANCELLED", "BOGUS"})
     if (mdem::is_final(std::string_view(n))) final_states.insert(n);
   EXPECT_EQ(final_states, (std::set<std::string>{"SUCCEEDED", "FAILED", "CANCELLED"}));
+}
+
+// ---- ranges in flag help are the validation ranges (issue 12 item 8) ----
+
+struct Interval {
+  double lo, hi;
+  bool lo_open, hi_open;
+};
+
+// The interval "[a, b]", "(a, b]", ... on a help line, if any.
+std::optional<Interval> interval_on(const std::string& line) {
+  static const std::regex re(
+      R"(([\[(])(-?[0-9.]+(?:e[-+]?[0-9]+)?), (-?[0-9.]+(?:e[-+]?[0-9]+)?)([\])]))");
+  std::smatch m;
+  if (!std::regex_search(line, m, re)) return std::nullopt;
+  return Interval{std::stod(m[2]), std::stod(m[3]), m[1] == "(", m[4] == ")"};
+}
+
+// Whether the proto field at a dotted path ("twist.layers") is an integer.
+bool integer_field(const std::string& path) {
+  const google::protobuf::Descriptor* d = v1::JobSpec::descriptor();
+  const google::protobuf::FieldDescriptor* f = nullptr;
+  std::stringstream ss(path);
+  for (std::string part; std::getline(ss, part, '.');) {
+    f = d->FindFieldByName(part);
+    if (!f) return false;
+    if (f->message_type()) d = f->message_type();
+  }
+  return f && f->cpp_type() == google::protobuf::FieldDescriptor::CPPTYPE_INT32;
+}
+
+std::string text_of(double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+// Whether validation refuses `value` for `field` given through `flag` as out of its range.
+bool refused(const mdem::cli::SpecKind& kind, const std::string& flag, const std::string& field,
+             double value) {
+  try {
+    mdem::cli::spec_from_flags(kind, {{flag, text_of(value)}});
+  } catch (const spec::SpecError& e) {
+    for (const spec::FieldError& f : e.errors())
+      if (f.field == field && (f.message.find("out of range") != std::string::npos ||
+                               f.message.find("not a finite") != std::string::npos))
+        return true;
+  }
+  return false;
+}
+
+TEST(FlagHelp, RangesInTheHelpAreTheRangesValidationEnforces) {
+  for (const mdem::cli::SpecKind& kind : mdem::cli::spec_kinds().all()) {
+    SCOPED_TRACE(kind.name);
+    const std::string help = mdem::cli::spec_flags_help(kind);
+    mdem::cli::FlagFields fields = mdem::cli::common_flag_fields();
+    for (const auto& ff : kind.flag_fields()) fields.push_back(ff);
+    int checked = 0;
+    for (const auto& [flag, field] : fields) {
+      // The flag's own help line: "  --torque X   T_max, (0, 500] nN·nm (default 64)".
+      const std::size_t at = help.find("\n  " + flag + " ");
+      if (at == std::string::npos) continue;
+      const std::string line = help.substr(at + 1, help.find('\n', at + 1) - at - 1);
+      const std::optional<Interval> in = interval_on(line);
+      if (!in) continue;
+      SCOPED_TRACE(line);
+      ++checked;
+      const bool whole = integer_field(field);
+      auto step = [&](double b) { return whole ? 1.0 : std::max(std::abs(b) * 1e-9, 1e-12); };
+      // Each end: the end itself is allowed unless open, the next value outward never is;
+      // inside an open end the next value is allowed.
+      EXPECT_EQ(refused(kind, flag, field, in->lo), in->lo_open) << field << " at " << in->lo;
+      EXPECT_TRUE(refused(kind, flag, field, in->lo - step(in->lo))) << field;
+      EXPECT_EQ(refused(kind, flag, field, in->hi), in->hi_open) << field << " at " << in->hi;
+      EXPECT_TRUE(refused(kind, flag, field, in->hi + step(in->hi))) << field;
+      if (in->lo_open) EXPECT_FALSE(refused(kind, flag, field, in->lo + step(in->lo))) << field;
+      if (in->hi_open) EXPECT_FALSE(refused(kind, flag, field, in->hi - step(in->hi))) << field;
+    }
+    // Every numeric flag with a fixed range states it: run 5, twist 10, compression 10.
+    EXPECT_GE(checked, kind.name == "twist" ? 15 : 14);
+  }
 }
 
 }  // namespace

@@ -66,36 +66,54 @@ void apply_compression_flags(const FlagValues& f, v1::JobSpec& spec) {
 
 namespace {
 
-constexpr const char* kCompressionFlagsHelp =
-    "Particle:\n"
-    "  --outer-radius NM    outer radius R1, 2..1000 nm (default 10)\n"
-    "  --inner-radius NM    inner radius R2 of a shell, 0 <= R2 < R1 (default 0: a full "
-    "sphere)\n"
-    "  --grain-radius MIN,MAX  grain radii, uniform in [MIN, MAX], 0.2..100 nm, and\n"
-    "                       2 x MAX <= R1 - R2 (default 1,2; one value R: all grains R)\n"
-    "  --porosity X         target porosity, (0.2, 0.95) (default 0.4); at most 2 000 000\n"
-    "                       grains, (1 - porosity) x shell volume / mean grain volume\n"
-    "  --material M         gold (default: E 79 GPa, nu 0.46, 19.3 g/cm3), cds (cadmium\n"
-    "                       sulfide: E 28 GPa, nu 0.46, 4.82 g/cm3) or custom (give --youngs,\n"
-    "                       --poisson and --density)\n"
-    "  --youngs GPA         Young's modulus, (0, 2000] GPa (default the material's)\n"
-    "  --poisson X          Poisson's ratio, [0, 0.5) (default the material's)\n"
-    "  --density G_CM3      density, (0, 50] g/cm3 (default the material's)\n"
-    "  --bond B             elastic, plastic (yield at --strength, shear at half of it) or\n"
-    "                       brittle (break at --strength, shear at half of it); default the\n"
-    "                       material's: plastic for gold, brittle for cds, elastic for custom\n"
-    "  --strength GPA       bond yield (plastic) or failure (brittle) stress, (0, 100] GPa\n"
-    "                       (default 8 for gold, 4 for cds; required for custom plastic or\n"
-    "                       brittle bonds)\n"
-    "Loading:\n"
-    "  --speed X            speed of each platen, (0, 1] nm/ps (default 0.01; the approach\n"
-    "                       rate is twice it)\n"
-    "  --peak NM            peak displacement h, the platens' total approach, (0, 2 x R1) nm\n"
-    "                       (default 0.4 x R1, 20 % of the diameter)\n"
-    "  --no-unload          stop at the peak (default: return the platens to the start)\n"
-    "  --viscous-ratio X    damping ratio of the normal dashpots on bonds and contacts, 0..1\n"
-    "                       (default 0.5; 0 = none)\n"
-    "  --local-damping X    PFC local damping, 0..0.99 (default 0.7)\n";
+// Ranges and defaults from the spec rules (mdem/spec_rules.h).
+std::string compression_flags_help() {
+  namespace r = spec::ranges;
+  namespace d = spec::defaults;
+  const std::string max_grains = std::to_string(static_cast<long>(spec::kMaxCompressionGrains));
+  return "Particle:\n" +
+         flag_help("--outer-radius NM", "outer radius R1", r::kOuterRadiusNm,
+                   default_of(d::kOuterRadiusNm)) +
+         "  --inner-radius NM    inner radius R2 of a shell, 0 <= R2 < R1 (default " +
+         default_of(d::kInnerRadiusNm) +
+         ": a full sphere)\n"
+         "  --grain-radius MIN,MAX  grain radii, uniform in [MIN, MAX], each in\n"
+         "                       " +
+         spec::interval_text(r::kGrainRadiusNm) + ", and 2 x MAX <= R1 - R2 (default " +
+         default_of(d::kGrainRadiusMinNm) + "," + default_of(d::kGrainRadiusMaxNm) +
+         "; one value R: all grains R)\n" +
+         flag_help("--porosity X", "target porosity", r::kPorosity, default_of(d::kPorosity)) +
+         "                       at most " + max_grains +
+         " grains, (1 - porosity) x shell volume / mean grain volume\n"
+         "  --material M         gold (default: E 79 GPa, nu 0.46, 19.3 g/cm3), cds (cadmium\n"
+         "                       sulfide: E 28 GPa, nu 0.46, 4.82 g/cm3) or custom (give "
+         "--youngs,\n"
+         "                       --poisson and --density)\n" +
+         flag_help("--youngs GPA", "Young's modulus", r::kYoungsGpa, "the material's") +
+         flag_help("--poisson X", "Poisson's ratio", r::kPoisson, "the material's") +
+         flag_help("--density G_CM3", "density", r::kDensity, "the material's") +
+         "  --bond B             elastic, plastic (yield at --strength, shear at half of it) or\n"
+         "                       brittle (break at --strength, shear at half of it); default the\n"
+         "                       material's: plastic for gold, brittle for cds, elastic for "
+         "custom\n" +
+         flag_help("--strength GPA", "bond yield (plastic) or failure (brittle) stress",
+                   r::kStrengthGpa, "") +
+         "                       (default 8 for gold, 4 for cds; required for custom plastic or\n"
+         "                       brittle bonds)\n"
+         "Loading:\n" +
+         flag_help("--speed X", "speed of each platen", r::kPlatenSpeed,
+                   default_of(d::kPlatenSpeed)) +
+         "                       (the approach rate is twice it)\n"
+         "  --peak NM            peak displacement h, the platens' total approach, (0, 2 x R1) nm\n"
+         "                       (default " +
+         default_of(d::kPeakPerOuterRadius) +
+         " x R1, 20 % of the diameter)\n"
+         "  --no-unload          stop at the peak (default: return the platens to the start)\n" +
+         flag_help("--viscous-ratio X", "normal dashpot ratio on bonds and contacts, 0 = none",
+                   r::kViscousRatio, default_of(d::kViscousRatio)) +
+         flag_help("--local-damping X", "PFC local damping", r::kLocalDamping,
+                   default_of(d::kCompressionLocalDamping));
+}
 
 constexpr const char* kCompressionAbout =
     "Crushes a nanocrystalline particle between two flat platens (thesis Ch. 6): grains with\n"
@@ -129,9 +147,15 @@ std::string building_compression(const v1::JobSpec& spec) {
 }  // namespace
 
 SpecKind compression_kind() {
-  return {"compression",         v1::JobSpec::kCompression, compression_flag_fields,
-          {"--no-unload"},       apply_compression_flags,   kCompressionAbout,
-          kCompressionFlagsHelp, describe_compression,      building_compression};
+  return {"compression",
+          v1::JobSpec::kCompression,
+          compression_flag_fields,
+          {"--no-unload"},
+          apply_compression_flags,
+          kCompressionAbout,
+          compression_flags_help(),
+          describe_compression,
+          building_compression};
 }
 
 }  // namespace mdem::cli

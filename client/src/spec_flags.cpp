@@ -108,26 +108,47 @@ constexpr const char* kSpecFileHelp =
     "Spec:\n"
     "  --spec FILE          a JobSpec as JSON or YAML (.json/.yaml/.yml); flags override it\n";
 
-constexpr const char* kRunFlagsHelp =
-    "Run:\n"
-    "  --dt X|auto          time step, 1e-6..1 ps (default auto = safety x critical step)\n"
-    "  --safety X           fraction of the critical step, (0, 1] (default 0.6)\n"
-    "  --threads N          OpenMP threads, 0 = all cores (default 0)\n"
-    "  --energy-every X     energy/observable frame interval, ps (default 1)\n"
-    "  --snapshot-every X   snapshot interval, ps; 0 = none (default 10)\n"
-    "  --name TEXT          a label for `mdem ls`\n"
-    "  --seed N             random seed (default 1)\n";
+std::string run_flags_help() {
+  namespace r = spec::ranges;
+  namespace d = spec::defaults;
+  return "Run:\n" +
+         flag_help("--dt X|auto", "time step", r::kDtPs, "auto = safety x critical step") +
+         flag_help("--safety X", "fraction of the critical step", r::kSafety,
+                   default_of(d::kSafety)) +
+         flag_help("--threads N", "OpenMP threads, 0 = all cores", r::kThreads,
+                   default_of(d::kThreads)) +
+         flag_help("--energy-every X", "energy/observable frame interval", r::kEnergyEveryPs,
+                   default_of(d::kEnergyEveryPs)) +
+         flag_help("--snapshot-every X", "snapshot interval, 0 = none", r::kSnapshotEveryPs,
+                   default_of(d::kSnapshotEveryPs)) +
+         "  --name TEXT          a label for `mdem ls`\n"
+         "  --seed N             random seed (default " +
+         std::to_string(d::kSeed) + ")\n";
+}
 
 }  // namespace
 
+std::string flag_help(std::string_view usage, std::string_view text, const spec::Range& range,
+                      std::string_view default_text) {
+  constexpr std::size_t kColumn = 23;  // where the text starts
+  std::string line = "  " + std::string(usage);
+  line.append(line.size() < kColumn ? kColumn - line.size() : 1, ' ');
+  line.append(text);
+  line += (text.empty() ? "" : ", ") + spec::interval_text(range);
+  if (!default_text.empty()) line += " (default " + std::string(default_text) + ")";
+  return line + "\n";
+}
+
+std::string default_of(double v) { return spec::number_text(v); }
+
 std::string spec_flags_help(const SpecKind& kind) {
-  return std::string(kSpecFileHelp) + kind.flags_help + kRunFlagsHelp;
+  return std::string(kSpecFileHelp) + kind.flags_help + run_flags_help();
 }
 
 std::string all_spec_flags_help() {
   std::string s = kSpecFileHelp;
   for (const SpecKind& k : spec_kinds().all()) s += "\n== " + k.name + " jobs ==\n" + k.flags_help;
-  return s + "\n" + kRunFlagsHelp;
+  return s + "\n" + run_flags_help();
 }
 
 }  // namespace mdem::cli

@@ -16,6 +16,7 @@
 #include "mdem/kind_registry.h"
 #include "mdem/spec.h"
 #include "mdem/spec_kinds.h"
+#include "mdem/spec_rules.h"
 #include "mdem/v1/job.pb.h"
 
 namespace mdem::cli {
@@ -58,7 +59,7 @@ struct SpecKind {
   // Sets the kind's fields from its given flags (and selects the kind, even with none given).
   void (*apply_flags)(const FlagValues& f, v1::JobSpec& spec);
   const char* about;       // what the job does, for the help of `mdem run <kind>`
-  const char* flags_help;  // help of the kind's own flags, its sections with their titles
+  std::string flags_help;  // help of the kind's own flags, its sections with their titles
   // A line on the built job before it runs (stderr of `mdem run`), and one while it is built
   // (may be empty).
   std::string (*describe)(Job& job, const v1::JobSpec& spec);
@@ -84,6 +85,14 @@ v1::JobSpec spec_from_flags(const SpecKind& kind, const FlagValues& given,
 
 // A spec error as usage lines: each field, the flag that sets it, and what is allowed.
 std::string describe_spec_error(const spec::SpecError& e);
+
+// One line of flag help with the field's allowed range and default from the spec rules
+// (mdem/spec_rules.h), so help and validation cannot disagree:
+// "  --torque X           T_max, (0, 500] nN·nm (default 64)". default_text may be empty.
+std::string flag_help(std::string_view usage, std::string_view text, const spec::Range& range,
+                      std::string_view default_text);
+// A default for flag_help: the number as validation prints it ("67.8", "1e+06").
+std::string default_of(double v);
 
 // Help of the flags of spec_flag_spec(kind): Spec, the kind's sections, Run.
 std::string spec_flags_help(const SpecKind& kind);

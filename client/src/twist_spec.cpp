@@ -85,31 +85,48 @@ void apply_twist_flags(const FlagValues& f, v1::JobSpec& spec) {
 
 namespace {
 
-constexpr const char* kTwistFlagsHelp =
-    "Rope:\n"
-    "  --layers N           hexagon layers incl. the centre tube, 2..10 (default 6 = 91 "
-    "tubes)\n"
-    "  --length NM          tube length, 5..2000 nm, whole 1.356 nm segments (default 67.8)\n"
-    "  --spacing NM|auto    tube spacing 1.5..2.5 nm (default auto: the lattice vdW minimum)\n"
-    "  --missing I,J,...    point defects: lattice sites without a tube (0 = centre)\n"
-    "  --line-defects A[:W[:F]];...  rows of missing tubes from the centre at angle A deg,\n"
-    "                       W rows wide (1..3), over the central fraction F of the length\n"
-    "Loading:\n"
-    "  --torque X           T_max, (0, 500] nN·nm (default 64)\n"
-    "  --rate X             ramp rate, (0, 100] nN·nm/ps (default 1.0)\n"
-    "  --hold X             hold at T_max, 0..1e6 ps (default 100)\n"
-    "  --bc B               constant-moment (default) or twist-relaxation\n"
-    "  --grip-load G        rigid-grip (default: the grip's moment about the rope axis is T)\n"
-    "                       or per-element (each grip element carries T about its own\n"
-    "                       centre, the thesis's PFC ball moments)\n"
-    "  --unload             ramp the torque down after the hold, then relax\n"
-    "  --unload-hold X      relaxation after unloading, 0..1e6 ps (default 50)\n"
-    "  --grip-segments N    end segments per tube in each grip, 1..segments/4 (default 1)\n"
-    "  --damping-ratio X    vdW contact dashpot ratio, 0..1 (default 0.03)\n"
-    "  --local-damping X    PFC local damping, 0..0.99 (default 0.1)\n"
-    "  --temperature K      seeded random velocities and spins of K kelvin at the start,\n"
-    "                       0..2000 (default 0: at rest; noise lets buckling start;\n"
-    "                       seeded by --seed)\n";
+// Ranges and defaults from the spec rules (mdem/spec_rules.h).
+std::string twist_flags_help() {
+  namespace r = spec::ranges;
+  namespace d = spec::defaults;
+  return "Rope:\n" +
+         flag_help("--layers N", "hexagon layers incl. the centre tube", r::kLayers,
+                   default_of(d::kLayers) + " = " +
+                       std::to_string(spec::hex_tube_count(d::kLayers)) + " tubes") +
+         flag_help("--length NM", "tube length in whole 1.356 nm segments", r::kLengthNm,
+                   default_of(d::kLengthNm)) +
+         flag_help("--spacing NM|auto", "tube spacing", r::kSpacingNm,
+                   "auto: the lattice vdW minimum") +
+         "  --missing I,J,...    point defects: lattice sites without a tube (0 = centre)\n"
+         "  --line-defects A[:W[:F]];...  rows of missing tubes from the centre at angle A deg\n"
+         "                       " +
+         spec::interval_text(r::kAngleDeg) + ", W rows wide " + spec::interval_text(r::kWidth) +
+         ",\n"
+         "                       over the central fraction F " +
+         spec::interval_text(r::kLengthFraction) +
+         "\n"
+         "Loading:\n" +
+         flag_help("--torque X", "T_max", r::kTorqueNnNm, default_of(d::kTorqueNnNm)) +
+         flag_help("--rate X", "ramp rate", r::kTorqueRate, default_of(d::kTorqueRate)) +
+         flag_help("--hold X", "hold at T_max", r::kHoldPs, default_of(d::kHoldPs)) +
+         "  --bc B               constant-moment (default) or twist-relaxation\n"
+         "  --grip-load G        rigid-grip (default: the grip's moment about the rope axis is "
+         "T)\n"
+         "                       or per-element (each grip element carries T about its own\n"
+         "                       centre, the thesis's PFC ball moments)\n"
+         "  --unload             ramp the torque down after the hold, then relax\n" +
+         flag_help("--unload-hold X", "relaxation after unloading", r::kUnloadHoldPs,
+                   default_of(d::kUnloadHoldPs)) +
+         "  --grip-segments N    end segments per tube in each grip, 1..segments/4 (default " +
+         std::to_string(d::kGripSegments) + ")\n" +
+         flag_help("--damping-ratio X", "vdW contact dashpot ratio", r::kVdwDampingRatio,
+                   default_of(d::kVdwDampingRatio)) +
+         flag_help("--local-damping X", "PFC local damping", r::kLocalDamping,
+                   default_of(d::kLocalDamping)) +
+         flag_help("--temperature K", "random velocities and spins at start", r::kTemperatureK,
+                   default_of(d::kTemperatureK) + ": at rest") +
+         "                       (noise lets buckling start; seeded by --seed)\n";
+}
 
 constexpr const char* kTwistAbout =
     "Twists a hexagonal rope of parallel (10,10) CNTs by torques on its end grips (thesis\n"
@@ -136,7 +153,7 @@ std::string no_building_line(const v1::JobSpec&) { return {}; }
 
 SpecKind twist_kind() {
   return {"twist",     v1::JobSpec::kTwist, twist_flag_fields, {"--unload"},    apply_twist_flags,
-          kTwistAbout, kTwistFlagsHelp,     describe_twist,    no_building_line};
+          kTwistAbout, twist_flags_help(),  describe_twist,    no_building_line};
 }
 
 }  // namespace mdem::cli
