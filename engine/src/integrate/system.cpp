@@ -8,6 +8,8 @@
 #include <limits>
 #include <sstream>
 
+#include "mdem/core/limits.h"
+
 namespace mdem {
 
 namespace {
@@ -142,8 +144,9 @@ void System::initialize() {
     bad("local_damping must be in [0, 1), got " + std::to_string(s.local_damping));
   if (!std::isfinite(s.skin) || s.skin <= 0 || s.skin > 100)
     bad("skin must be in (0, 100] nm, got " + std::to_string(s.skin));
-  if (s.threads < 0 || s.threads > 1024)
-    bad("threads must be in [0, 1024] (0 = all cores), got " + std::to_string(s.threads));
+  if (s.threads < 0 || s.threads > limits::kMaxThreads)
+    bad("threads must be in [0, " + std::to_string(limits::kMaxThreads) +
+        "] (0 = all cores), got " + std::to_string(s.threads));
   if (s.guard_every < 1) bad("guard_every must be >= 1 step");
   if (!std::isfinite(s.guard_energy_tolerance) || s.guard_energy_tolerance <= 0)
     bad("guard_energy_tolerance must be finite and > 0");

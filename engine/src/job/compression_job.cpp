@@ -10,6 +10,7 @@
 #include <string>
 #include <utility>
 
+#include "mdem/core/limits.h"
 #include "mdem/core/units.h"
 #include "mdem/force/contact/linear_contact.h"
 #include "mdem/force/wall/planar_wall.h"
@@ -25,9 +26,11 @@ const CompressionJobSpec& validated(const CompressionJobSpec& s) {
         "compression loading peak_displacement must be below the particle's diameter " +
         std::to_string(2.0 * s.particle.r_outer) + " nm, got " +
         std::to_string(s.loading.peak_displacement));
-  if (!std::isfinite(s.viscous_ratio) || s.viscous_ratio < 0 || s.viscous_ratio > 10)
-    throw std::invalid_argument("compression viscous_ratio must be in [0, 10], got " +
-                                std::to_string(s.viscous_ratio));
+  if (!std::isfinite(s.viscous_ratio) || s.viscous_ratio < 0 ||
+      s.viscous_ratio > limits::kMaxDashpotRatio)
+    throw std::invalid_argument("compression viscous_ratio must be in [0, " +
+                                std::to_string(static_cast<int>(limits::kMaxDashpotRatio)) +
+                                "] (critical damping), got " + std::to_string(s.viscous_ratio));
   GrainBondParams bp = s.bond;
   bp.material = s.particle.material;
   GrainBond check(bp);  // bond behaviour and strength

@@ -16,6 +16,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "mdem/core/limits.h"
 #include "mdem/io/state_io.h"
 #include "mdem/neighbor/neighbor_list.h"
 
@@ -313,8 +314,10 @@ GrainDashpots::GrainDashpots(double ratio, const GrainBond* bonds, double contac
       bonds_(bonds),
       contact_youngs_(contact_youngs),
       max_radius_(max_radius) {
-  require(std::isfinite(ratio) && ratio >= 0 && ratio <= 10,
-          "grain dashpots ratio (β) must be finite and in [0, 10], got " + std::to_string(ratio));
+  require(std::isfinite(ratio) && ratio >= 0 && ratio <= limits::kMaxDashpotRatio,
+          "grain dashpots ratio (β) must be finite and in [0, " +
+              std::to_string(static_cast<int>(limits::kMaxDashpotRatio)) +
+              "] (critical damping), got " + std::to_string(ratio));
   require(std::isfinite(contact_youngs) && contact_youngs > 0,
           "grain dashpots contact_youngs must be finite and > 0 eV/nm³, got " +
               std::to_string(contact_youngs));

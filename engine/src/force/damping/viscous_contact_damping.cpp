@@ -4,12 +4,15 @@
 #include <stdexcept>
 #include <string>
 
+#include "mdem/core/limits.h"
+
 namespace mdem {
 
 ContactDampingKernel::ContactDampingKernel(ContactDampingParams p) : p_(p) {
-  if (!std::isfinite(p.ratio) || p.ratio < 0 || p.ratio > 10)
-    throw std::invalid_argument("contact damping ratio must be finite and in [0, 10], got " +
-                                std::to_string(p.ratio));
+  if (!std::isfinite(p.ratio) || p.ratio < 0 || p.ratio > limits::kMaxDashpotRatio)
+    throw std::invalid_argument("contact damping ratio must be finite and in [0, " +
+                                std::to_string(static_cast<int>(limits::kMaxDashpotRatio)) +
+                                "] (critical damping), got " + std::to_string(p.ratio));
   if (!std::isfinite(p.stiffness) || p.stiffness <= 0)
     throw std::invalid_argument("contact damping stiffness must be finite and > 0");
   if (!std::isfinite(p.cutoff) || p.cutoff <= 0)
