@@ -55,8 +55,9 @@ std::vector<v1::JobEvent> snapshot_events(const Snapshot& s) {
 
 }  // namespace
 
-Scheduler::Scheduler(const DaemonConfig& config, JobStore& store, EventWriter& writer)
-    : config_(config), store_(store), writer_(writer) {}
+Scheduler::Scheduler(const DaemonConfig& config, JobStore& store, EventWriter& writer,
+                     std::unique_ptr<Executor> executor)
+    : config_(config), store_(store), writer_(writer), executor_(std::move(executor)) {}
 
 Scheduler::~Scheduler() {
   {
@@ -64,8 +65,8 @@ Scheduler::~Scheduler() {
     stopping_ = true;
   }
   cv_.notify_all();
-  for (auto& t : workers_)
-    if (t.joinable()) t.join();
+  if (dispatcher_.joinable()) dispatcher_.join();
+  if (executor_) executor_->shutdown(true);  // the jobs under way end first
 }
 
 std::string Scheduler::checkpoint_path(const std::string& job_id) const {
@@ -73,7 +74,8 @@ std::string Scheduler::checkpoint_path(const std::string& job_id) const {
 }
 
 void Scheduler::start() {
-  for (int i = 0; i < config_.workers; ++i) workers_.emplace_back([this] { worker(); });
+  if (!executor_) executor_ = std::make_unique<ThreadPoolExecutor>(config_.workers);
+  dispatcher_ = std::thread([this] { dispatch(); });
 }
 
 void Scheduler::wake() { cv_.notify_all(); }
@@ -99,19 +101,21 @@ void Scheduler::drain() {
   cv_.notify_all();
   const auto deadline = Clock::now() + std::chrono::duration<double>(config_.drain_timeout_s);
   cv_.wait_until(lock, deadline, [&] { return active_workers_ == 0; });
-  if (active_workers_ > 0)
-    spdlog::warn("event=drain_timeout running={} note=\"requeued at next start\"", active_workers_);
+  const int still_running = active_workers_;
+  if (still_running > 0)
+    spdlog::warn("event=drain_timeout running={} note=\"requeued at next start\"", still_running);
   lock.unlock();
-  for (auto& t : workers_)
-    if (active_workers_ == 0 && t.joinable())
-      t.join();
-    else
-      t.detach();
+  if (dispatcher_.joinable()) dispatcher_.join();
+  if (executor_) executor_->shutdown(still_running == 0);
 }
 
-void Scheduler::worker() {
+void Scheduler::dispatch() {
   std::unique_lock lock(mu_);
   while (!stopping_) {
+    if (active_workers_ >= executor_->capacity()) {
+      cv_.wait_for(lock, std::chrono::seconds(1));
+      continue;
+    }
     std::optional<JobRow> row;
     try {
       row = store_.claim_next();
@@ -125,12 +129,13 @@ void Scheduler::worker() {
     auto ctl = std::make_shared<Control>();
     running_[row->id] = ctl;
     ++active_workers_;
-    lock.unlock();
-    run(*row, *ctl);
-    lock.lock();
-    running_.erase(row->id);
-    --active_workers_;
-    cv_.notify_all();
+    executor_->submit([this, job = std::move(*row), ctl] {
+      run(job, *ctl);
+      std::lock_guard done(mu_);
+      running_.erase(job.id);
+      --active_workers_;
+      cv_.notify_all();
+    });
   }
 }
 

@@ -1,8 +1,9 @@
 #pragma once
-// The worker pool (service.md "Sharing a queue"): N worker threads, each taking the next job the
-// store's fair order gives and running it on the engine with the job's fixed thread count, its
-// events going through an EventChannel, its state checkpointed at a wall-clock cadence. Cancel
-// and drain reach a running job between chunks of steps (well under a second).
+// The scheduler (service.md "Sharing a queue"): a dispatcher hands the next job the store's fair
+// order gives to an Executor (today N worker threads, executor.h) whenever it has room; each job
+// runs through the shared JobRunner with the job's fixed thread count, its events going through
+// an EventChannel, its state checkpointed at a wall-clock cadence. Cancel and drain reach a
+// running job between chunks of steps (well under a second).
 #include <atomic>
 #include <condition_variable>
 #include <map>
@@ -14,6 +15,7 @@
 
 #include "config.h"
 #include "event_writer.h"
+#include "executor.h"
 #include "job_store.h"
 #include "mdem/job/job.h"
 
@@ -21,7 +23,9 @@ namespace mdem::server {
 
 class Scheduler {
  public:
-  Scheduler(const DaemonConfig& config, JobStore& store, EventWriter& writer);
+  // executor: where jobs run; nullptr = a pool of config.workers threads.
+  Scheduler(const DaemonConfig& config, JobStore& store, EventWriter& writer,
+            std::unique_ptr<Executor> executor = nullptr);
   ~Scheduler();
   Scheduler(const Scheduler&) = delete;
   Scheduler& operator=(const Scheduler&) = delete;
@@ -43,7 +47,8 @@ class Scheduler {
     std::atomic<int> stop{kRun};
     std::string reason;  // set before stop, read after
   };
-  void worker();
+  // Hands queued jobs to the executor while it has room, until stopping.
+  void dispatch();
   void run(const JobRow& row, Control& ctl);
   // For a job built only by the worker: initializes it (which checks the time step) and throws
   // std::invalid_argument when it needs more steps than max_steps.
@@ -56,8 +61,9 @@ class Scheduler {
   std::condition_variable cv_;
   bool stopping_ = false;
   std::map<std::string, std::shared_ptr<Control>> running_;
-  std::vector<std::thread> workers_;
-  int active_workers_ = 0;
+  std::unique_ptr<Executor> executor_;
+  std::thread dispatcher_;
+  int active_workers_ = 0;  // jobs handed to the executor and not yet ended
 };
 
 }  // namespace mdem::server
