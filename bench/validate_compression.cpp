@@ -180,6 +180,7 @@ IntegratorSettings settings(const Options& o) {
 // Builds the job (packing included), runs it, records the curve every `every_ps`.
 RunResult run(CompressionJob& job, double every_ps) {
   RunResult r;
+  prepare_job(job);  // the packing stage, when the job packs its particle
   System& sys = job.system();
   sys.initialize();
   r.grains = static_cast<long>(job.packing().grains.size());

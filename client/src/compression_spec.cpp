@@ -127,10 +127,12 @@ std::string describe_compression(Job& job, const v1::JobSpec& spec) {
   if (!comp) return {};
   const v1::CompressionSpec& c = spec.compression();
   std::ostringstream o;
-  o << comp->packing().grains.size() << " grains, " << comp->bonds().bonds().size()
-    << " bonds, porosity " << comp->packing().porosity << "; platens at "
-    << c.platen_speed_nm_per_ps() << " nm/ps to h = " << c.peak_displacement_nm() << " nm"
-    << (c.unload() ? " and back" : "") << ", " << job.duration() << " ps";
+  // The particle is packed by the job's first stage: its figures are known once it ran.
+  if (comp->built())
+    o << comp->packing().grains.size() << " grains, " << comp->bonds().bonds().size()
+      << " bonds, porosity " << comp->packing().porosity << "; ";
+  o << "platens at " << c.platen_speed_nm_per_ps() << " nm/ps to h = " << c.peak_displacement_nm()
+    << " nm" << (c.unload() ? " and back" : "") << ", " << job.duration() << " ps";
   return o.str();
 }
 

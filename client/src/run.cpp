@@ -6,11 +6,12 @@
 #include <iomanip>
 #include <sstream>
 
+#include "console.h"
 #include "flags.h"
 #include "jobs.h"
 #include "mdem/cli.h"
 #include "mdem/core/units.h"
-#include "mdem/scene/bundle_scene.h"
+#include "mdem/job/bundle_job.h"
 #include "mdem/spec_job.h"
 
 namespace mdem::cli {
@@ -94,7 +95,9 @@ json energies_json(const System& sys) {
 }
 
 int run_bundle(const RunOptions& o, std::ostream& out, std::ostream& err) {
-  System sys = make_bundle_system(o.bundle, o.settings);
+  // An ordinary job under the one run loop: progress, Ctrl-C and checkpoints as for every kind.
+  BundleJob job({o.bundle, o.steps}, o.settings);
+  System& sys = job.system();
   sys.initialize();
   const double e0 = sys.energy().total();
   const long n = static_cast<long>(sys.elements().size());
@@ -103,18 +106,24 @@ int run_bundle(const RunOptions& o, std::ostream& out, std::ostream& err) {
         << " elements, " << o.steps << " steps of " << sys.dt() * 1000 << " fs on " << sys.threads()
         << " thread(s)\n";
   const auto t0 = std::chrono::steady_clock::now();
+  // A progress line about every tenth of the run.
   const long chunk = std::max(1L, o.steps / 10);
+  JobObserver obs;
+  long printed = 0;
+  obs.progress = [&](const JobProgress& p) {
+    if (o.json || p.step == 0 || (p.step / chunk <= printed / chunk && p.step != o.steps)) return;
+    printed = p.step;
+    err << "  step " << p.step << "/" << o.steps << "  t = " << std::fixed << std::setprecision(1)
+        << sys.time() << " ps  E = " << std::setprecision(6) << sys.energy().total() << " eV\n"
+        << std::defaultfloat;
+  };
+  InterruptGuard interrupt;
+  obs.cancelled = [] { return InterruptGuard::interrupted(); };
   std::string failure;
+  bool cancelled = false;
   try {
-    for (long done = 0; done < o.steps;) {
-      const long k = std::min(chunk, o.steps - done);
-      sys.run(k);
-      done += k;
-      if (!o.json)
-        err << "  step " << done << "/" << o.steps << "  t = " << std::fixed << std::setprecision(1)
-            << sys.time() << " ps  E = " << std::setprecision(6) << sys.energy().total() << " eV\n"
-            << std::defaultfloat;
-    }
+    cancelled = run_job(job, {1.0, 0.0}, obs).cancelled;
+    if (cancelled) failure = "interrupted by the user at step " + std::to_string(sys.steps());
   } catch (const NumericalError& e) {
     failure = e.what();
   }
@@ -122,7 +131,7 @@ int run_bundle(const RunOptions& o, std::ostream& out, std::ostream& err) {
 
   json doc;
   doc["job"] = "bundle";
-  doc["state"] = failure.empty() ? "SUCCEEDED" : "FAILED";
+  doc["state"] = failure.empty() ? "SUCCEEDED" : cancelled ? "CANCELLED" : "FAILED";
   if (!failure.empty()) doc["reason"] = failure;
   json summary;
   summary["tubes"] = o.bundle.tubes;

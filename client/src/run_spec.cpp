@@ -81,7 +81,16 @@ int execute(const SpecKind& kind, const Parsed& p, std::ostream& out, std::ostre
     }
   };
   obs.snapshot = [&](const Snapshot& s) { store.append_snapshot(rec.id, s); };
-  obs.progress = [&](const JobProgress& pr) { progress(pr); };
+  int stage_seen = 0;
+  obs.progress = [&](const JobProgress& pr) {
+    // A job whose first stage builds the scene (the compression's packing) is described again
+    // once built, with what the build made (grains, bonds).
+    if (pr.stage_index != stage_seen && !p.json) {
+      stage_seen = pr.stage_index;
+      err << kind.name << " " << rec.id << ": " << kind.describe(job, p.spec) << "\n";
+    }
+    progress(pr);
+  };
   InterruptGuard interrupt;
   obs.cancelled = [] { return InterruptGuard::interrupted(); };
 

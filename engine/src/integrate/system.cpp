@@ -135,6 +135,34 @@ System::~System() = default;
 System::System(System&&) noexcept = default;
 System& System::operator=(System&&) noexcept = default;
 
+namespace {
+// A plain function as an updater.
+class FunctionUpdater final : public Updater {
+ public:
+  explicit FunctionUpdater(std::function<void(System&, double)> fn) : fn_(std::move(fn)) {}
+  void apply(System& sys, double t) override { fn_(sys, t); }
+
+ private:
+  std::function<void(System&, double)> fn_;
+};
+}  // namespace
+
+void System::add_updater(std::shared_ptr<Updater> u) {
+  if (!u) throw std::invalid_argument("System::add_updater: null updater");
+  updaters_.push_back(std::move(u));
+}
+
+void System::add_updater(std::function<void(System&, double)> fn) {
+  add_updater(std::make_shared<FunctionUpdater>(std::move(fn)));
+}
+
+void System::set_local_damping(double alpha) {
+  if (!std::isfinite(alpha) || alpha < 0 || alpha >= 1)
+    throw ConfigError("local_damping must be in [0, 1), got " + std::to_string(alpha));
+  settings_.local_damping = alpha;
+  dissipative_ = dissipative_ || alpha > 0;
+}
+
 void System::initialize() {
   const IntegratorSettings& s = settings_;
   auto bad = [](const std::string& m) { throw ConfigError(m); };
@@ -179,7 +207,7 @@ void System::initialize() {
   fd_.assign(n, Vec3::Zero());
   td_.assign(n, Vec3::Zero());
 
-  for (auto& u : updaters_) u(*this, time_);
+  for (auto& u : updaters_) u->apply(*this, time_);
   compute_forces();
   check_finite_forces();
 
@@ -228,7 +256,17 @@ void System::compute_forces() {
   // PFC local damping on the unbalanced force of every free DOF: F_k -= α|F_k| sign(v_k).
   const double a = settings_.local_damping;
   const bool model_damping = sink_.has_damping();
-  if (a == 0) return;  // fd_, td_ hold the model dampers' forces (or stay zero)
+  if (a == 0) {
+    // fd_, td_ hold the model dampers' forces, or are zero (also after a stage turned local
+    // damping off: set_local_damping).
+    if (!model_damping && local_damping_was_on_) {
+      std::fill(fd_.begin(), fd_.end(), Vec3::Zero());
+      std::fill(td_.begin(), td_.end(), Vec3::Zero());
+      local_damping_was_on_ = false;
+    }
+    return;
+  }
+  local_damping_was_on_ = true;
   const long n = static_cast<long>(el_.size());
 #pragma omp parallel for schedule(static) if (n >= kParallelMinItems)
   for (long i = 0; i < n; ++i) {
@@ -361,7 +399,7 @@ void System::run(long nsteps) {
 
     time_ += dt;
     ++steps_;
-    for (auto& u : updaters_) u(*this, time_);
+    for (auto& u : updaters_) u->apply(*this, time_);
     compute_forces();
 
     // 3. Second half kick with the forces at t_{n+1}; the rest of the work and damping books.

@@ -152,6 +152,7 @@ void System::load_state(StateReader& r) {
   const std::size_t n = el_.size();
   r.get(fd_, "fd", n);
   r.get(td_, "td", n);
+  local_damping_was_on_ = true;  // the loaded fd_/td_ may hold local damping
   for (auto* a : {&f_prev_, &t_prev_, &fext_prev_, &text_prev_}) r.get(*a, "work bookkeeping");
   const bool has_list = r.get_bool("has neighbour list");
   if (has_list != !pairs_.empty())

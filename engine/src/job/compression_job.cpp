@@ -14,6 +14,7 @@
 #include "mdem/core/units.h"
 #include "mdem/force/contact/linear_contact.h"
 #include "mdem/force/wall/planar_wall.h"
+#include "mdem/job/packing_stage.h"
 
 namespace mdem {
 namespace {
@@ -63,34 +64,132 @@ Elements with_platens(const PackedParticle& packed, const PackingSpec& p) {
 
 }  // namespace
 
+// Peak force and the first loading's stiffness, tracked before every force evaluation, one
+// evaluation behind: the forces in the system are those of the previous evaluation, made at the
+// displacement recorded at the previous call. An observer of the compression stage.
+class CompressionJob::Tracker final : public Updater {
+ public:
+  explicit Tracker(const CompressionJob& job) : job_(job) {}
+  void apply(System& sys, double) override {
+    if (have_prev) {
+      const double F = job_.platen_force_nN();
+      if (F > peak_force) {
+        peak_force = F;
+        peak_at = prev_disp;
+      }
+      if (prev_loading && prev_disp <= 0.5 * job_.protocol_->params().peak_displacement) {
+        sum_fh += F * prev_disp;
+        sum_hh += prev_disp * prev_disp;
+      }
+    }
+    prev_disp = job_.displacement();
+    prev_loading = job_.protocol_->loading(sys.time());
+    have_prev = true;
+  }
+  void save_state(StateWriter& w) const override {
+    w.begin("compression");
+    w.put(peak_force);
+    w.put(peak_at);
+    w.put(prev_disp);
+    w.put(have_prev);
+    w.put(prev_loading);
+    w.put(sum_fh);
+    w.put(sum_hh);
+  }
+  void load_state(StateReader& r) override {
+    r.begin("compression");
+    peak_force = r.get<double>("peak_force");
+    peak_at = r.get<double>("peak_at");
+    prev_disp = r.get<double>("prev_disp");
+    have_prev = r.get_bool("have_prev");
+    prev_loading = r.get_bool("prev_loading");
+    sum_fh = r.get<double>("sum_fh");
+    sum_hh = r.get<double>("sum_hh");
+  }
+
+  double peak_force = 0, peak_at = 0;
+  double prev_disp = 0;
+  bool have_prev = false, prev_loading = false;
+  double sum_fh = 0, sum_hh = 0;  // least squares F = k·h over the first half of the loading
+
+ private:
+  const CompressionJob& job_;
+};
+
 CompressionJob::CompressionJob(const CompressionJobSpec& spec, IntegratorSettings settings)
-    : CompressionJob(pack_grains(packing_spec(validated(spec), settings)), spec, settings) {}
+    : spec_(validated(spec)), settings_(settings) {
+  auto packing = std::make_unique<PackingStage>(packing_spec(spec_, settings_));
+  packing_stage_ = packing.get();
+  add_stage(std::move(packing));
+  add_compression_stage();
+}
 
 CompressionJob::CompressionJob(PackedParticle packed, const CompressionJobSpec& spec,
                                IntegratorSettings settings)
-    : packed_(std::move(packed)), sys_(with_platens(packed_, spec.particle), settings) {
-  validated(spec);
-  const PackingSpec& p = spec.particle;
+    : spec_(validated(spec)), settings_(settings) {
+  build(std::move(packed));
+  add_compression_stage();
+}
+
+CompressionJob::~CompressionJob() = default;
+
+void CompressionJob::add_compression_stage() {
+  // The platens' indices are set when the system is built.
+  protocol_ = std::make_shared<CompressionProtocol>(spec_.loading, 0, 1);
+  if (sys_) protocol_->set_platens(top_, bottom_);
+  tracker_ = std::make_shared<Tracker>(*this);
+  SystemStage::Settings st;
+  st.protocol = protocol_;
+  st.observers = {tracker_};
+  st.stop = StopCondition::after(protocol_->duration());
+  add_stage(std::make_unique<SystemStage>("compression", *this, std::move(st)));
+}
+
+void CompressionJob::stage_finished(std::size_t k) {
+  if (packing_stage_ && k == 0) {
+    build(packing_stage_->result());
+    protocol_->set_platens(top_, bottom_);
+  }
+}
+
+System& CompressionJob::system() { return sys_ ? *sys_ : packing_stage_->system(); }
+
+const System& CompressionJob::sys() const {
+  if (!sys_)
+    throw std::logic_error("compression job: the particle is not packed yet (run the packing)");
+  return *sys_;
+}
+
+const GrainBond& CompressionJob::bonds() const {
+  sys();
+  return *bonds_;
+}
+
+void CompressionJob::build(PackedParticle packed) {
+  packed_ = std::move(packed);
+  const PackingSpec& p = spec_.particle;
+  sys_ = std::make_unique<System>(with_platens(packed_, p), settings_);
+  System& sys = *sys_;
   n_grains_ = packed_.grains.size();
   top_ = n_grains_;
   bottom_ = n_grains_ + 1;
-  const Elements& el = sys_.elements();
+  const Elements& el = sys.elements();
   z_top0_ = el.x[top_].z();
   z_bottom0_ = el.x[bottom_].z();
   height0_ = z_top0_ - z_bottom0_;
   x0_ = el.x;
 
-  GrainBondParams bp = spec.bond;
+  GrainBondParams bp = spec_.bond;
   bp.material = p.material;
   auto bonds = std::make_unique<GrainBond>(bp);
   for (const auto& [i, j] : packed_.touching) bonds->add(el, i, j);
-  bonds_ = sys_.add(std::move(bonds));
+  bonds_ = sys.add(std::move(bonds));
   initial_bonds_ = bonds_->bonds().size();
-  sys_.add(std::make_unique<LinearContact>(p.material.youngs, p.grain_r_max, bonds_));
-  sys_.add(std::make_unique<PlanarWallContact>(p.material.youngs));
-  if (spec.viscous_ratio > 0)
-    sys_.add(std::make_unique<GrainDashpots>(spec.viscous_ratio, bonds_, p.material.youngs,
-                                             p.grain_r_max));
+  sys.add(std::make_unique<LinearContact>(p.material.youngs, p.grain_r_max, bonds_));
+  sys.add(std::make_unique<PlanarWallContact>(p.material.youngs));
+  if (spec_.viscous_ratio > 0)
+    sys.add(std::make_unique<GrainDashpots>(spec_.viscous_ratio, bonds_, p.material.youngs,
+                                            p.grain_r_max));
 
   // Slip reference: each grain's bonded neighbours at the start of loading.
   std::vector<std::uint32_t> count(n_grains_ + 1, 0);
@@ -106,16 +205,9 @@ CompressionJob::CompressionJob(PackedParticle packed, const CompressionJobSpec& 
     slip_partners_[fill[b.bond.i]++] = b.bond.j;
     slip_partners_[fill[b.bond.j]++] = b.bond.i;
   }
-
-  protocol_ = std::make_shared<CompressionProtocol>(spec.loading, top_, bottom_);
-  auto protocol = protocol_;
-  sys_.add_updater([protocol](System& s, double t) { (*protocol)(s, t); });
-  sys_.add_updater([this](System&, double) { track(); });
 }
 
 double CompressionJob::duration() const { return protocol_->duration(); }
-
-std::string CompressionJob::phase() const { return protocol_->phase(sys_.time()); }
 
 std::vector<EnergyTerm> CompressionJob::energy_terms() {
   return {EnergyTerm::BondTension, EnergyTerm::BondShear, EnergyTerm::BondBending,
@@ -123,19 +215,19 @@ std::vector<EnergyTerm> CompressionJob::energy_terms() {
 }
 
 double CompressionJob::platen_force_nN() const {
-  const Elements& el = sys_.elements();
-  const auto& fd = sys_.damping_forces();
+  const Elements& el = sys().elements();
+  const auto& fd = sys().damping_forces();
   auto fz = [&](std::size_t p) { return el.f[p].z() + (p < fd.size() ? fd[p].z() : 0.0); };
   return units::to_nN(0.5 * (fz(top_) - fz(bottom_)));
 }
 
 double CompressionJob::displacement() const {
-  const Elements& el = sys_.elements();
+  const Elements& el = sys().elements();
   return (z_top0_ - el.x[top_].z()) + (el.x[bottom_].z() - z_bottom0_);
 }
 
 double CompressionJob::height() const {
-  const Elements& el = sys_.elements();
+  const Elements& el = sys().elements();
   double top = -std::numeric_limits<double>::infinity();
   double bottom = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < n_grains_; ++i) {
@@ -145,28 +237,9 @@ double CompressionJob::height() const {
   return top - bottom;
 }
 
-void CompressionJob::track() {
-  // Called before each force evaluation: the forces in the system are those of the previous
-  // evaluation, made at the displacement recorded at the previous call.
-  if (have_prev_) {
-    const double F = platen_force_nN();
-    if (F > peak_force_) {
-      peak_force_ = F;
-      peak_at_ = prev_disp_;
-    }
-    if (prev_loading_ && prev_disp_ <= 0.5 * protocol_->params().peak_displacement) {
-      sum_fh_ += F * prev_disp_;
-      sum_hh_ += prev_disp_ * prev_disp_;
-    }
-  }
-  prev_disp_ = displacement();
-  prev_loading_ = protocol_->loading(sys_.time());
-  have_prev_ = true;
-}
-
 Mat3 CompressionJob::rigid_rotation() const {
   // Kabsch: the rotation R minimising Σ |(x_i − c) − R (X_i − C)|² over the bonded grains.
-  const Elements& el = sys_.elements();
+  const Elements& el = sys().elements();
   Vec3 c = Vec3::Zero(), c0 = Vec3::Zero();
   long n = 0;
   for (std::size_t i = 0; i < n_grains_; ++i)
@@ -188,7 +261,7 @@ Mat3 CompressionJob::rigid_rotation() const {
 }
 
 std::vector<double> CompressionJob::slip() const {
-  const Elements& el = sys_.elements();
+  const Elements& el = sys().elements();
   const Mat3 R = rigid_rotation();
   std::vector<double> s(el.size(), 0.0);
   for (std::size_t i = 0; i < n_grains_; ++i) {
@@ -244,7 +317,7 @@ SlipFigures slip_figures(const std::vector<double>& s, const std::vector<std::ui
 
 std::vector<double> CompressionJob::observe() {
   const SlipFigures sf = slip_figures(slip(), slip_offsets_);
-  std::vector<double> v = {sys_.time(),
+  std::vector<double> v = {sys().time(),
                            displacement(),
                            platen_force_nN(),
                            static_cast<double>(bonds_->intact_count()),
@@ -253,16 +326,18 @@ std::vector<double> CompressionJob::observe() {
                            static_cast<double>(fragments()),
                            sf.max,
                            sf.mean};
-  for (double e : energy_values(sys_, energy_terms())) v.push_back(e);
+  for (double e : energy_values(sys(), energy_terms())) v.push_back(e);
   return v;
 }
 
 void CompressionJob::decorate(Snapshot& s) const { s.scalars.emplace_back("slip_nm", slip()); }
 
 Summary CompressionJob::summary() {
+  if (!built())  // stopped while packing: how far it got
+    return {{"packing_steps", packing_stage_->steps_done()}, {"simulated_ps", 0.0}};
   // The peak includes the current state (the tracker lags one evaluation behind).
   const double force = platen_force_nN(), disp = displacement();
-  double peak = peak_force_, peak_at = peak_at_;
+  double peak = tracker_->peak_force, peak_at = tracker_->peak_at;
   if (force > peak) {
     peak = force;
     peak_at = disp;
@@ -278,7 +353,8 @@ Summary CompressionJob::summary() {
           {"packing_wall_shift_nm", packed_.wall_shift},
           {"peak_force_nN", peak},
           {"peak_force_displacement_nm", peak_at},
-          {"loading_stiffness_nN_per_nm", sum_hh_ > 0 ? sum_fh_ / sum_hh_ : 0.0},
+          {"loading_stiffness_nN_per_nm",
+           tracker_->sum_hh > 0 ? tracker_->sum_fh / tracker_->sum_hh : 0.0},
           {"final_force_nN", force},
           {"final_displacement_nm", disp},
           {"residual_height_loss_nm", height0_ - height()},
@@ -288,36 +364,10 @@ Summary CompressionJob::summary() {
           {"fragments", fragments()},
           {"slip_max_nm", sf.max},
           {"slip_mean_nm", sf.mean},
-          {"energy_balance_error", sys_.energy_balance_error()},
-          {"dt_ps", sys_.dt()},
-          {"critical_dt_ps", sys_.critical_dt()},
-          {"simulated_ps", sys_.time()}};
-}
-
-void CompressionJob::save_state(StateWriter& w) const {
-  sys_.save_state(w);
-  w.begin("compression");
-  w.put(peak_force_);
-  w.put(peak_at_);
-  w.put(prev_disp_);
-  w.put(have_prev_);
-  w.put(prev_loading_);
-  w.put(sum_fh_);
-  w.put(sum_hh_);
-}
-
-void CompressionJob::load_state(StateReader& r) {
-  // The system's load initializes it, which runs the updaters (the tracker too): its state is
-  // loaded after, overwriting what that changed.
-  sys_.load_state(r);
-  r.begin("compression");
-  peak_force_ = r.get<double>("peak_force");
-  peak_at_ = r.get<double>("peak_at");
-  prev_disp_ = r.get<double>("prev_disp");
-  have_prev_ = r.get_bool("have_prev");
-  prev_loading_ = r.get_bool("prev_loading");
-  sum_fh_ = r.get<double>("sum_fh");
-  sum_hh_ = r.get<double>("sum_hh");
+          {"energy_balance_error", sys().energy_balance_error()},
+          {"dt_ps", sys().dt()},
+          {"critical_dt_ps", sys().critical_dt()},
+          {"simulated_ps", sys().time()}};
 }
 
 }  // namespace mdem

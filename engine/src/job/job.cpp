@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace mdem {
 
@@ -32,12 +33,80 @@ long steps_for(double every_ps, double dt) {
 
 }  // namespace
 
-void Job::save_state(StateWriter&) const {
-  throw CheckpointError("job kind '" + std::string(kind()) + "' cannot checkpoint");
+std::string Job::phase() const {
+  const Stage* st = current_stage();
+  return st ? st->phase() : std::string("done");
 }
 
-void Job::load_state(StateReader&) {
-  throw CheckpointError("job kind '" + std::string(kind()) + "' cannot checkpoint");
+Stage& Job::add_stage(std::unique_ptr<Stage> stage) {
+  stages_.push_back(std::move(stage));
+  if (stages_.size() == 1) stages_.front()->install();
+  return *stages_.back();
+}
+
+void Job::add_state(std::shared_ptr<Stateful> part) { parts_.push_back(std::move(part)); }
+
+void Job::begin_stage() {
+  Stage* st = current_stage();
+  if (!st || begun_) return;
+  st->install();
+  st->begin();
+  begun_ = true;
+}
+
+void Job::finish_stage() {
+  Stage* st = current_stage();
+  if (!st) return;
+  finished_steps_ += st->steps_done();
+  stage_finished(index_);
+  ++index_;
+  begun_ = false;
+  if (Stage* next = current_stage()) next->install();
+}
+
+void Job::save_state(StateWriter& w) const {
+  w.begin("job");
+  w.put(static_cast<std::uint64_t>(stages_.size()));
+  w.put(static_cast<std::uint64_t>(index_));
+  w.put(begun_);
+  w.put(finished_steps_);
+  for (std::size_t k = 0; k < index_; ++k) {
+    w.begin("result of " + stages_[k]->name());
+    stages_[k]->save_result(w);
+  }
+  if (const Stage* st = current_stage()) {
+    w.begin("stage " + st->name());
+    st->save_state(w);
+  }
+  w.begin("job parts");
+  for (const auto& p : parts_) p->save_state(w);
+}
+
+void Job::load_state(StateReader& r) {
+  if (index_ != 0 || begun_)
+    throw CheckpointError("a checkpoint loads only into a job built anew, not one that has run");
+  r.begin("job");
+  if (r.get<std::uint64_t>("stage count") != stages_.size())
+    r.fail("stage count", "the checkpoint's job has other stages than this job's");
+  const auto index = r.get<std::uint64_t>("stage index");
+  if (index > stages_.size()) r.fail("stage index", "names a stage this job does not have");
+  const bool begun = r.get_bool("stage begun");
+  const long finished = r.get<long>("finished steps");
+  for (std::size_t k = 0; k < index; ++k) {
+    r.begin("result of " + stages_[k]->name());
+    stages_[k]->load_result(r);
+    stage_finished(k);
+  }
+  index_ = static_cast<std::size_t>(index);
+  finished_steps_ = finished;
+  if (Stage* st = current_stage()) {
+    r.begin("stage " + st->name());
+    st->install();  // its updaters are in place when the system's load initializes it
+    st->load_state(r);
+  }
+  begun_ = begun;
+  r.begin("job parts");
+  for (const auto& p : parts_) p->load_state(r);
 }
 
 std::string save_checkpoint(const Job& job) {
@@ -59,55 +128,103 @@ void load_checkpoint(Job& job, std::string_view bytes) {
   r.expect_end();
 }
 
+namespace {
+
+// The step of the time series: the reporting stage's system's step, 0 before one runs.
+long series_step(Job& job) {
+  const Stage* st = job.current_stage();
+  return st && st->reports() ? job.system().steps() : (st ? 0 : job.system().steps());
+}
+
+// Total planned steps from the current stage on (0 for stages whose length is unknown yet).
+long planned_from(const Job& job) {
+  long total = job.finished_steps();
+  for (std::size_t k = job.stage_index(); k < job.stages().size(); ++k)
+    total += job.stages()[k]->planned_steps();
+  return total;
+}
+
+}  // namespace
+
 JobRunResult run_job(Job& job, const JobCadence& cadence, const JobObserver& obs) {
-  System& sys = job.system();
-  // A restored (or advanced) system keeps its state: initializing would reset its energy ledger
-  // and guard figures, and the run that started it reported step 0.
-  const bool resumed = sys.steps() > 0;
-  if (!resumed || !sys.initialized()) sys.initialize();
-  const double dt = sys.dt();
-  const long total = std::max(1L, static_cast<long>(std::ceil(job.duration() / dt - 1e-9)));
-  const long frame_every = steps_for(cadence.frame_every_ps, dt);
-  const long snap_every = steps_for(cadence.snapshot_every_ps, dt);
-  const long progress_every = std::max(1L, total / 200);
-  // Cancellation is polled between chunks: at most 50 000 element-steps per chunk, so a cancel
-  // takes effect within ~0.2 s (a twisted rope costs 3.5 µs per element-step on two threads, 6 on
-  // one). Chunks do not change the results: System::run(a + b) equals run(a) then run(b), and the
-  // guard counts absolute steps.
-  const long n = static_cast<long>(sys.elements().size());
-  const long max_chunk = std::max(1L, 50000 / std::max(1L, n));
-
-  auto report = [&](long step) {
-    if (obs.frame && frame_every && (step % frame_every == 0 || step == total))
-      obs.frame({step, sys.time(), job.observe()});
-    if (obs.snapshot && snap_every && (step % snap_every == 0 || step == total)) {
-      Snapshot snap = capture_snapshot(sys.elements(), step, sys.time());
-      job.decorate(snap);
-      obs.snapshot(snap);
-    }
-    if (obs.progress && (step % progress_every == 0 || step == total))
-      obs.progress({step, total, sys.time(), job.phase()});
-  };
-
   JobRunResult r;
-  long step = sys.steps();
-  if (!resumed) report(0);
-  while (step < total) {
-    if (obs.cancelled && obs.cancelled()) {
-      r.cancelled = true;
-      break;
+  const int stage_count = static_cast<int>(job.stages().size());
+  while (Stage* st = job.current_stage()) {
+    const bool fresh = !job.stage_begun();
+    job.begin_stage();
+    System& sys = st->system();
+    const bool reports = st->reports();
+    const double dt = sys.dt();
+    const long frame_every = reports ? steps_for(cadence.frame_every_ps, dt) : 0;
+    const long snap_every = reports ? steps_for(cadence.snapshot_every_ps, dt) : 0;
+    const long start = sys.steps() - st->steps_done();
+    const long progress_every = std::max(1L, st->planned_steps() / 200);
+    // Cancellation is polled between chunks: at most 50 000 element-steps per chunk, so a cancel
+    // takes effect within ~0.2 s (a twisted rope costs 3.5 µs per element-step on two threads,
+    // 6 on one). Chunks do not change the results: System::run(a + b) equals run(a) then run(b),
+    // and the guard counts absolute steps.
+    const long n = static_cast<long>(sys.elements().size());
+    const long max_chunk = std::max(1L, 50000 / std::max(1L, n));
+
+    auto report = [&](long step, long before, bool end) {
+      if (obs.frame && frame_every && (step % frame_every == 0 || end))
+        obs.frame({step, sys.time(), job.observe()});
+      if (obs.snapshot && snap_every && (step % snap_every == 0 || end)) {
+        Snapshot snap = capture_snapshot(sys.elements(), step, sys.time());
+        job.decorate(snap);
+        obs.snapshot(snap);
+      }
+      // Progress when the stage's step crosses a multiple of progress_every (a stage working in
+      // units may step over one), at its start and at its end.
+      const long k = step - start, k0 = before - start;
+      if (obs.progress && (k / progress_every > k0 / progress_every || k == 0 || end)) {
+        JobProgress p;
+        p.step = job.finished_steps() + st->steps_done();
+        p.total_steps = std::max(p.step, planned_from(job));
+        p.time_ps = sys.time();
+        p.phase = st->phase();
+        p.stage = st->name();
+        p.stage_index = static_cast<int>(job.stage_index());
+        p.stage_count = stage_count;
+        p.stage_step = st->steps_done();
+        p.stage_total_steps = st->planned_steps();
+        obs.progress(p);
+      }
+    };
+
+    long step = sys.steps();
+    if (fresh && st->steps_done() == 0 && (step == 0 || !reports))
+      report(step, step - 1, st->finished());
+    while (!st->finished()) {
+      if (obs.cancelled && obs.cancelled()) {
+        r.cancelled = true;
+        r.steps = series_step(job);
+        return r;
+      }
+      // Run to the next step at which anything is due, or a chunk's length.
+      long next = std::min(step + max_chunk,
+                           start + ((step - start) / progress_every + 1) * progress_every);
+      if (frame_every) next = std::min(next, (step / frame_every + 1) * frame_every);
+      if (snap_every) next = std::min(next, (step / snap_every + 1) * snap_every);
+      st->advance(next - step);
+      const long before = step;
+      step = sys.steps();
+      report(step, before, st->finished());
+      if (obs.checkpoint) obs.checkpoint(series_step(job));
     }
-    // Run to the next step at which anything is due, or a chunk's length.
-    long next = std::min({total, (step / progress_every + 1) * progress_every, step + max_chunk});
-    if (frame_every) next = std::min(next, (step / frame_every + 1) * frame_every);
-    if (snap_every) next = std::min(next, (step / snap_every + 1) * snap_every);
-    sys.run(next - step);
-    step = next;
-    report(step);
-    if (obs.checkpoint) obs.checkpoint(step);
+    job.finish_stage();
   }
-  r.steps = step;
+  r.steps = job.system().steps();
   return r;
+}
+
+void prepare_job(Job& job) {
+  while (Stage* st = job.current_stage()) {
+    if (st->reports()) return;
+    job.begin_stage();
+    while (!st->finished()) st->advance(std::numeric_limits<long>::max());
+    job.finish_stage();
+  }
 }
 
 }  // namespace mdem

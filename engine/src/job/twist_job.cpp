@@ -38,42 +38,28 @@ System build_system(const TwistJobSpec& spec, IntegratorSettings settings, Rope&
 TwistJob::TwistJob(const TwistJobSpec& spec, IntegratorSettings settings)
     : sys_(build_system(spec, settings, rope_)) {
   protocol_ = std::make_shared<TwistProtocol>(spec.loading, rope_.grip_a, rope_.grip_b);
-  shift_ = std::make_shared<ShiftAngle>(sys_.elements(), rope_);
-  auto protocol = protocol_;
-  sys_.add_updater([protocol](System& s, double t) { protocol->apply(s, t); });
-  // The shift angle is unwrapped from samples less than a half turn apart: sample every 10 steps,
-  // counted by the system (not the updater) so a job restored from a checkpoint samples at the
-  // same steps.
-  auto shift = shift_;
-  const Rope* rope = &rope_;
-  double* angle = &shift_angle_;
-  sys_.add_updater([shift, rope, angle](System& s, double) {
-    if (s.steps() % 10 == 0) *angle = shift->update(s.elements(), rope_axis(s.elements(), *rope));
-  });
+  shift_ = std::make_shared<ShiftAngleSampler>(sys_.elements(), rope_);
+  peaks_ = std::make_shared<Peaks>();
+  SystemStage::Settings stage;
+  stage.protocol = protocol_;
+  stage.observers = {shift_};
+  stage.stop = StopCondition::after(protocol_->duration());
+  add_stage(std::make_unique<SystemStage>("twist", *this, std::move(stage)));
+  add_state(peaks_);
 }
 
-void TwistJob::save_state(StateWriter& w) const {
-  sys_.save_state(w);
-  protocol_->save_state(w);
-  shift_->save_state(w);
-  w.begin("twist_report");
-  w.put(shift_angle_);
-  w.put(max_charge_);
-  w.put(peak_twist_);
-  w.put(peak_shift_);
+void TwistJob::Peaks::save_state(StateWriter& w) const {
+  w.begin("twist_peaks");
+  w.put(max_charge);
+  w.put(twist);
+  w.put(shift);
 }
 
-void TwistJob::load_state(StateReader& r) {
-  // The system's load initializes it, which runs the updaters at the state as built: the
-  // protocol's and the shift angle's state are loaded after it, overwriting what that changed.
-  sys_.load_state(r);
-  protocol_->load_state(r);
-  shift_->load_state(r);
-  r.begin("twist_report");
-  shift_angle_ = r.get<double>("shift_angle");
-  max_charge_ = r.get<int>("max_charge");
-  peak_twist_ = r.get<double>("peak_twist");
-  peak_shift_ = r.get<double>("peak_shift");
+void TwistJob::Peaks::load_state(StateReader& r) {
+  r.begin("twist_peaks");
+  max_charge = r.get<int>("max_charge");
+  twist = r.get<double>("peak_twist");
+  shift = r.get<double>("peak_shift");
 }
 
 std::vector<EnergyTerm> TwistJob::energy_terms() {
@@ -81,21 +67,17 @@ std::vector<EnergyTerm> TwistJob::energy_terms() {
           EnergyTerm::BondTorsion, EnergyTerm::Vdw};
 }
 
-std::string TwistJob::phase() const {
-  return std::string(twist_phase_name(protocol_->phase_at(sys_.time())));
-}
-
 TwistReport TwistJob::report() {
   const Elements& el = sys_.elements();
   const RopeAxis axis = rope_axis(el, rope_);
-  shift_angle_ = shift_->update(el, axis);
+  const double shift_angle = shift_->sample(el);
   const RopeShape shape = rope_shape(el, rope_, axis);
   TwistReport r;
   r.applied_torque_nNnm = units::to_nNnm(protocol_->torque_at(sys_.time()));
   r.grip_reaction_nNnm = units::to_nNnm(0.5 * (grip_reaction_moment(el, rope_.grip_a, axis.dir) -
                                                grip_reaction_moment(el, rope_.grip_b, axis.dir)));
   r.twist_angle_deg = shape.twist_angle_deg;
-  r.shift_angle_deg = shift_angle_ * 180.0 / std::numbers::pi;
+  r.shift_angle_deg = shift_angle * 180.0 / std::numbers::pi;
   r.rope_radius_nm = shape.radius;
   r.length_nm = axis.length;
   r.core_void_nm = shape.core_void_radius;
@@ -103,9 +85,10 @@ TwistReport TwistJob::report() {
   r.clusters = shape.clusters;
   r.topological_charge = rope_topological_charge(el, rope_, axis).charge;
   r.morphology = classify_morphology(shape, rope_);
-  max_charge_ = std::max(max_charge_, r.topological_charge);
-  peak_twist_ = std::max(peak_twist_, r.twist_angle_deg);
-  peak_shift_ = std::max(peak_shift_, std::abs(r.shift_angle_deg));
+  Peaks& p = *peaks_;
+  p.max_charge = std::max(p.max_charge, r.topological_charge);
+  p.twist = std::max(p.twist, r.twist_angle_deg);
+  p.shift = std::max(p.shift, std::abs(r.shift_angle_deg));
   return r;
 }
 
@@ -135,9 +118,9 @@ Summary TwistJob::summary() {
           {"twist_angle_deg", r.twist_angle_deg},
           {"shift_angle_deg", r.shift_angle_deg},
           {"topological_charge", static_cast<long>(r.topological_charge)},
-          {"max_topological_charge", static_cast<long>(max_charge_)},
-          {"peak_twist_angle_deg", peak_twist_},
-          {"peak_shift_angle_deg", peak_shift_},
+          {"max_topological_charge", static_cast<long>(peaks_->max_charge)},
+          {"peak_twist_angle_deg", peaks_->twist},
+          {"peak_shift_angle_deg", peaks_->shift},
           {"rope_radius_nm", r.rope_radius_nm},
           {"initial_rope_radius_nm", rope_.initial_radius},
           {"length_nm", r.length_nm},

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 #include <numeric>
+#include <stdexcept>
 #include <unordered_map>
 
 #include "mdem/core/cnt.h"
@@ -253,6 +254,32 @@ void ShiftAngle::save_state(StateWriter& w) const {
 void ShiftAngle::load_state(StateReader& r) {
   r.begin("shift_angle");
   angle_ = r.get<double>("angle");
+}
+
+ShiftAngleSampler::ShiftAngleSampler(const Elements& reference, const Rope& rope, long every)
+    : shift_(reference, rope), rope_(&rope), every_(every) {
+  if (every < 1) throw std::invalid_argument("shift angle sampling interval must be >= 1 step");
+}
+
+double ShiftAngleSampler::sample(const Elements& el) {
+  value_ = shift_.update(el, rope_axis(el, *rope_));
+  return value_;
+}
+
+void ShiftAngleSampler::apply(System& s, double) {
+  if (s.steps() % every_ == 0) sample(s.elements());
+}
+
+void ShiftAngleSampler::save_state(StateWriter& w) const {
+  shift_.save_state(w);
+  w.begin("shift_angle_sample");
+  w.put(value_);
+}
+
+void ShiftAngleSampler::load_state(StateReader& r) {
+  shift_.load_state(r);
+  r.begin("shift_angle_sample");
+  value_ = r.get<double>("value");
 }
 
 }  // namespace mdem

@@ -17,7 +17,13 @@ CompressionProtocol::CompressionProtocol(CompressionLoading loading, std::size_t
     throw std::invalid_argument(
         "compression loading peak_displacement must be finite and > 0 nm, got " +
         std::to_string(l_.peak_displacement));
+  set_platens(top, bottom);
+}
+
+void CompressionProtocol::set_platens(std::size_t top, std::size_t bottom) {
   if (top == bottom) throw std::invalid_argument("compression platens: top and bottom coincide");
+  top_ = top;
+  bottom_ = bottom;
 }
 
 double CompressionProtocol::peak_time() const { return l_.peak_displacement / (2.0 * l_.speed); }
@@ -41,7 +47,7 @@ std::string CompressionProtocol::phase(double t) const {
   return "done";
 }
 
-void CompressionProtocol::operator()(System& sys, double t) const {
+void CompressionProtocol::apply(System& sys, double t) {
   Elements& el = sys.elements();
   if (top_ >= el.size() || bottom_ >= el.size())
     throw std::logic_error("compression protocol: platen index out of range");

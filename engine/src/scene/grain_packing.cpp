@@ -39,6 +39,7 @@
 #include "mdem/force/wall/planar_wall.h"
 #include "mdem/force/wall/spherical_wall.h"
 #include "mdem/integrate/system.h"
+#include "mdem/io/state_io.h"
 
 namespace mdem {
 namespace {
@@ -261,9 +262,194 @@ long connected_components(std::size_t n,
   return components;
 }
 
-PackedParticle pack_grains(const PackingSpec& spec) {
-  validate(spec);
-  const PackingSpec& s = spec;
+// The packing's state between units. Growth: chunk k of kGrowChunk steps grows the radii to
+// scale(k); relaxation: blocks of kCheckEvery steps (run in kGrowChunk-step units; chunks of a
+// run do not change its result), each after a check of the equilibrium.
+struct GrainPacker::Impl {
+  enum class Phase : std::uint8_t { Grow = 0, Relax = 1, Done = 2 };
+
+  PackingSpec s;
+  std::vector<double> radius;  // full radii
+  std::size_t n = 0;
+  System sys;
+  LinearContact* contact = nullptr;
+  SphericalWallContact* sphere = nullptr;
+  double max_shift = 0, shift_per_step = 0;
+
+  Phase phase = Phase::Grow;
+  long k = 1;  // next growth chunk
+  long steps = 0;
+  double scale = kStartScale;
+  WallPlaces w;
+  bool confining = false;
+  long block_len = 0, block_done = 0;  // the relaxation block under way (0: at a check)
+  ContactStats st;
+  PackedParticle out;
+
+  Impl(const PackingSpec& spec, std::vector<double> radii, Elements el, IntegratorSettings cfg)
+      : s(spec), radius(std::move(radii)), n(radius.size()), sys(std::move(el), cfg) {
+    contact = sys.add(std::make_unique<LinearContact>(s.material.youngs, s.grain_r_max));
+    if (s.shape == PackingShape::Cube)
+      sys.add(std::make_unique<PlanarWallContact>(s.material.youngs));
+    else
+      sphere = sys.add(std::make_unique<SphericalWallContact>(Vec3::Zero(), s.r_outer, s.r_inner,
+                                                              s.material.youngs));
+    w = WallPlaces{s.r_outer, s.r_inner};
+    max_shift = s.shape == PackingShape::Cube ? s.r_outer - s.grain_r_max
+                : s.r_inner > 0               ? 0.5 * (s.r_outer - s.r_inner) - s.grain_r_max
+                                              : s.r_outer - s.grain_r_max;
+    shift_per_step = kShiftRate * s.grain_r_max;
+    // The step comes from the full-size grains (the stiffest contacts the packing meets), then
+    // the radii shrink for the start.
+    sys.initialize();
+    set_scale(kStartScale);
+    sys.refresh();
+  }
+
+  void set_scale(double f) {
+    scale = f;
+    Elements& e = sys.elements();
+    for (std::size_t i = 0; i < n; ++i) e.radius[i] = f * radius[i];
+  }
+
+  // Grains too few to jam in the container (a solid fraction below random close packing, ~0.64
+  // for frictionless spheres, less near walls) settle into a loose assembly with hardly any
+  // contacts: no bonded particle, and an unbalanced-force ratio that converges very slowly. Then
+  // the walls move in (the inner one out) at a slow, constant rate until the mean overlap reaches
+  // kTargetOverlap of the grain radius, and stop while the packing relaxes; a loss of confinement
+  // below half of it starts them again.
+  void move_walls(double shift) {
+    if (shift > max_shift)
+      throw std::runtime_error(
+          "packing: the walls moved in by " + std::to_string(shift) +
+          " nm without jamming the grains (target_porosity too high for this container?)");
+    out.wall_shift = shift;
+    w.outer = s.r_outer - shift;
+    w.inner = s.r_inner > 0 ? s.r_inner + shift : 0.0;
+    if (sphere) {
+      sphere->set_radii(w.outer, w.inner);
+    } else {
+      Elements& e = sys.elements();
+      for (std::size_t m = n; m < e.size(); ++m)
+        e.x[m] = -e.q[m].toRotationMatrix().col(2) * w.outer;
+    }
+  }
+
+  bool growing() const { return k * kGrowChunk <= kGrowSteps && steps < s.max_steps; }
+
+  // One unit; returns the steps it ran.
+  long unit() {
+    if (phase == Phase::Grow) {
+      const long chunk = std::min(kGrowChunk, s.max_steps - steps);
+      sys.run(chunk);
+      steps += chunk;
+      const double f = std::min(1.0, static_cast<double>(k * kGrowChunk) / kGrowSteps);
+      set_scale(kStartScale + (1.0 - kStartScale) * f);
+      sys.refresh();
+      ++k;
+      if (!growing()) {
+        set_scale(1.0);
+        sys.refresh();
+        confining = false;
+        st = contact_stats(sys, *contact, s, w, n);
+        phase = Phase::Relax;
+      }
+      return chunk;
+    }
+    if (block_len == 0) {  // a check of the equilibrium
+      if (st.mean_overlap() < 0.5 * kTargetOverlap) confining = true;
+      if (st.mean_overlap() >= kTargetOverlap) confining = false;
+      if (!confining && st.ratio() < s.tolerance) {
+        finish();
+        return 0;
+      }
+      if (steps >= s.max_steps)
+        throw std::runtime_error(
+            "packing did not reach equilibrium in max_steps = " + std::to_string(s.max_steps) +
+            " steps: unbalanced-force ratio " + std::to_string(st.ratio()) + " (tolerance " +
+            std::to_string(s.tolerance) + "), mean overlap " + std::to_string(st.mean_overlap()) +
+            " of a radius (raise max_steps or tolerance)");
+      block_len = std::min(kCheckEvery, s.max_steps - steps);
+      block_done = 0;
+    }
+    const long c = std::min(kGrowChunk, block_len - block_done);
+    if (confining) {
+      move_walls(out.wall_shift + shift_per_step * static_cast<double>(c));
+      sys.refresh();
+    }
+    sys.run(c);
+    block_done += c;
+    if (block_done == block_len) {
+      steps += block_len;
+      block_len = block_done = 0;
+      st = contact_stats(sys, *contact, s, w, n);
+    }
+    return c;
+  }
+
+  void finish() {
+    out.steps = steps;
+    out.unbalanced_ratio = st.ratio();
+
+    // Touching pairs from the neighbour list (fresh for the final positions).
+    const Elements& fin = sys.elements();
+    const NeighborList* nl = sys.neighbors();
+    std::vector<long> touches(n, 0);
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::uint32_t m = nl->offsets()[i]; m < nl->offsets()[i + 1]; ++m) {
+        const std::uint32_t j = nl->neighbors()[m];
+        if (j >= n) continue;
+        const double reach = radius[i] + radius[j];
+        if ((fin.x[j] - fin.x[i]).squaredNorm() < reach * reach) {
+          out.touching.emplace_back(static_cast<std::uint32_t>(std::min<std::size_t>(i, j)),
+                                    static_cast<std::uint32_t>(std::max<std::size_t>(i, j)));
+          ++touches[i];
+          ++touches[j];
+        }
+      }
+    std::sort(out.touching.begin(), out.touching.end());
+    out.rattlers = std::count(touches.begin(), touches.end(), 0L);
+    for (std::size_t i = 0; i < n; ++i)
+      out.grains.add(grain_element(fin.x[i], radius[i], s.material));
+    measure_porosity();
+    phase = Phase::Done;
+  }
+
+  // Porosity by seeded Monte Carlo points in the container (overlaps counted once).
+  void measure_porosity() {
+    Uniform pu(s.seed ^ 0x9e3779b97f4a7c15ULL);
+    const Grid grid(out.grains.x, s.r_outer + s.grain_r_max, s.grain_r_max);
+    long inside = 0;
+    for (long m = 0; m < kPorosityPoints; ++m) {
+      Vec3 p;
+      if (s.shape == PackingShape::Cube) {
+        p = Vec3(pu.in(-s.r_outer, s.r_outer), pu.in(-s.r_outer, s.r_outer),
+                 pu.in(-s.r_outer, s.r_outer));
+      } else {
+        for (;;) {
+          p = Vec3(pu.in(-s.r_outer, s.r_outer), pu.in(-s.r_outer, s.r_outer),
+                   pu.in(-s.r_outer, s.r_outer));
+          const double r2 = p.squaredNorm();
+          if (r2 <= s.r_outer * s.r_outer && r2 >= s.r_inner * s.r_inner) break;
+        }
+      }
+      if (grid.any_near(p, [&](std::uint32_t i) {
+            return (out.grains.x[i] - p).squaredNorm() < radius[i] * radius[i];
+          }))
+        ++inside;
+    }
+    const double solid = static_cast<double>(inside) / kPorosityPoints;
+    out.porosity = 1.0 - solid;
+    out.porosity_error = std::sqrt(solid * (1.0 - solid) / kPorosityPoints);
+  }
+};
+
+namespace {
+
+// Draws the radii and places the grains (one seeded stream), in cell order; then the elements:
+// grains, and for a cube its six platens.
+GrainPacker::Impl* new_packing(const PackingSpec& s) {
+  validate(s);
   Uniform u(s.seed);
 
   // Radii until the grain volume fills (1 − porosity) of the container: a drawn grain is kept
@@ -327,144 +513,140 @@ PackedParticle pack_grains(const PackingSpec& spec) {
   // Growing radii put in energy no load accounts for: the energy guard would read it as an
   // instability. Finiteness and the per-step motion guard stay on.
   cfg.guard_energy_tolerance = 1e100;
-  System sys(std::move(el), cfg);
-  auto* contact = sys.add(std::make_unique<LinearContact>(s.material.youngs, s.grain_r_max));
-  if (s.shape == PackingShape::Cube)
-    sys.add(std::make_unique<PlanarWallContact>(s.material.youngs));
-  else
-    sys.add(std::make_unique<SphericalWallContact>(Vec3::Zero(), s.r_outer, s.r_inner,
-                                                   s.material.youngs));
-  // The step comes from the full-size grains (the stiffest contacts the packing meets), then the
-  // radii shrink for the start.
-  sys.initialize();
-  auto set_scale = [&](double scale) {
-    Elements& e = sys.elements();
-    for (std::size_t i = 0; i < n; ++i) e.radius[i] = scale * radius[i];
-  };
-  set_scale(kStartScale);
-  sys.refresh();
+  return new GrainPacker::Impl(s, std::move(radius), std::move(el), cfg);
+}
 
-  PackedParticle out;
-  long steps = 0;
-  for (long k = 1; k * kGrowChunk <= kGrowSteps && steps < s.max_steps; ++k) {
-    const long chunk = std::min(kGrowChunk, s.max_steps - steps);
-    sys.run(chunk);
-    steps += chunk;
-    const double f = std::min(1.0, static_cast<double>(k * kGrowChunk) / kGrowSteps);
-    set_scale(kStartScale + (1.0 - kStartScale) * f);
-    sys.refresh();
+// The spec's fields, so that a checkpoint of another packing is refused.
+void put_spec(StateWriter& w, const PackingSpec& s) {
+  w.begin("packing spec");
+  w.put(s.shape);
+  for (double v : {s.r_outer, s.r_inner, s.grain_r_min, s.grain_r_max, s.target_porosity,
+                   s.material.youngs, s.material.poisson, s.material.density, s.tolerance})
+    w.put(v);
+  w.put(s.seed);
+  w.put(s.max_steps);
+}
+
+void check_spec(StateReader& r, const PackingSpec& s) {
+  r.begin("packing spec");
+  bool same = r.get<PackingShape>("shape") == s.shape;
+  for (double v : {s.r_outer, s.r_inner, s.grain_r_min, s.grain_r_max, s.target_porosity,
+                   s.material.youngs, s.material.poisson, s.material.density, s.tolerance})
+    same = r.get<double>("sizes, material, tolerance") == v && same;
+  same = r.get<std::uint64_t>("seed") == s.seed && same;
+  same = r.get<long>("max_steps") == s.max_steps && same;
+  if (!same)
+    r.fail({},
+           "the checkpoint's packing (shape, radii, porosity, material, seed or limits) differs "
+           "from this job's");
+}
+
+}  // namespace
+
+GrainPacker::GrainPacker(const PackingSpec& spec) : impl_(new_packing(spec)) {}
+GrainPacker::~GrainPacker() = default;
+
+bool GrainPacker::done() const { return impl_->phase == Impl::Phase::Done; }
+
+void GrainPacker::advance(long steps) {
+  long ran = 0;
+  while (!done() && ran < std::max(1L, steps)) ran += impl_->unit();
+}
+
+long GrainPacker::steps() const { return impl_->steps + impl_->block_done; }
+const PackingSpec& GrainPacker::spec() const { return impl_->s; }
+System& GrainPacker::system() { return impl_->sys; }
+
+const PackedParticle& GrainPacker::result() const {
+  if (!done()) throw std::logic_error("GrainPacker::result: the packing has not finished");
+  return impl_->out;
+}
+
+void GrainPacker::save_state(StateWriter& w) const {
+  const Impl& p = *impl_;
+  put_spec(w, p.s);
+  w.begin("packing");
+  w.put(p.phase);
+  if (p.phase == Impl::Phase::Done) {
+    const PackedParticle& o = p.out;
+    w.put(o.grains.x);
+    std::vector<std::uint32_t> pairs;  // i, j of each touching pair
+    for (const auto& [i, j] : o.touching) pairs.insert(pairs.end(), {i, j});
+    w.put(pairs);
+    for (double v : {o.porosity, o.porosity_error, o.unbalanced_ratio, o.wall_shift}) w.put(v);
+    w.put(o.rattlers);
+    w.put(o.steps);
+    return;
   }
-  set_scale(1.0);
-  sys.refresh();
+  w.put(p.k);
+  w.put(p.steps);
+  w.put(p.scale);
+  w.put(p.out.wall_shift);
+  w.put(p.confining);
+  w.put(p.block_len);
+  w.put(p.block_done);
+  for (double v : {p.st.force, p.st.overlap, p.st.unbalanced}) w.put(v);
+  w.put(p.st.count);
+  w.put(p.st.grains);
+  p.sys.save_state(w);
+}
 
-  // Relaxation at full size. Grains too few to jam in the container (a solid fraction below
-  // random close packing, ~0.64 for frictionless spheres, less near walls) settle into a loose
-  // assembly with hardly any contacts: no bonded particle, and an unbalanced-force ratio that
-  // converges very slowly. Then the walls move in (the inner one out) at a slow, constant rate
-  // until the mean overlap reaches kTargetOverlap of the grain radius, and stop while the packing
-  // relaxes; a loss of confinement below half of it starts them again.
-  auto* sphere = sys.find<SphericalWallContact>();
-  WallPlaces w{s.r_outer, s.r_inner};
-  const double max_shift = s.shape == PackingShape::Cube ? s.r_outer - s.grain_r_max
-                           : s.r_inner > 0 ? 0.5 * (s.r_outer - s.r_inner) - s.grain_r_max
-                                           : s.r_outer - s.grain_r_max;
-  const double shift_per_step = kShiftRate * s.grain_r_max;
-  auto move_walls = [&](double shift) {
-    if (shift > max_shift)
-      throw std::runtime_error(
-          "packing: the walls moved in by " + std::to_string(shift) +
-          " nm without jamming the grains (target_porosity too high for this container?)");
-    out.wall_shift = shift;
-    w.outer = s.r_outer - shift;
-    w.inner = s.r_inner > 0 ? s.r_inner + shift : 0.0;
-    if (sphere) {
-      sphere->set_radii(w.outer, w.inner);
-    } else {
-      Elements& e = sys.elements();
-      for (std::size_t k = n; k < e.size(); ++k)
-        e.x[k] = -e.q[k].toRotationMatrix().col(2) * w.outer;
+void GrainPacker::load_state(StateReader& r) {
+  Impl& p = *impl_;
+  check_spec(r, p.s);
+  r.begin("packing");
+  const auto phase = r.get<Impl::Phase>("phase");
+  if (phase > Impl::Phase::Done)
+    r.fail("phase", "holds an unknown phase " + std::to_string(static_cast<int>(phase)));
+  if (phase == Impl::Phase::Done) {
+    PackedParticle o;
+    std::vector<Vec3> x;
+    r.get(x, "grain positions", p.n);
+    std::vector<std::uint32_t> pairs;
+    r.get(pairs, "touching");
+    if (pairs.size() % 2) r.fail("touching", "holds an odd count of grain indices");
+    for (std::size_t m = 0; m < pairs.size(); m += 2) {
+      if (!(pairs[m] < pairs[m + 1] && pairs[m + 1] < p.n))
+        r.fail("touching", "names a grain pair out of range");
+      o.touching.emplace_back(pairs[m], pairs[m + 1]);
     }
-  };
-  bool confining = false;
-  ContactStats st = contact_stats(sys, *contact, s, w, n);
-  for (;;) {
-    if (st.mean_overlap() < 0.5 * kTargetOverlap) confining = true;
-    if (st.mean_overlap() >= kTargetOverlap) confining = false;
-    if (!confining && st.ratio() < s.tolerance) break;
-    if (steps >= s.max_steps)
-      throw std::runtime_error(
-          "packing did not reach equilibrium in max_steps = " + std::to_string(s.max_steps) +
-          " steps: unbalanced-force ratio " + std::to_string(st.ratio()) + " (tolerance " +
-          std::to_string(s.tolerance) + "), mean overlap " + std::to_string(st.mean_overlap()) +
-          " of a radius (raise max_steps or tolerance)");
-    const long chunk = std::min(kCheckEvery, s.max_steps - steps);
-    if (confining) {
-      for (long done = 0; done < chunk; done += kGrowChunk) {
-        const long c = std::min(kGrowChunk, chunk - done);
-        move_walls(out.wall_shift + shift_per_step * static_cast<double>(c));
-        sys.refresh();
-        sys.run(c);
-      }
-    } else {
-      sys.run(chunk);
-    }
-    steps += chunk;
-    st = contact_stats(sys, *contact, s, w, n);
+    for (double* v : {&o.porosity, &o.porosity_error, &o.unbalanced_ratio, &o.wall_shift})
+      *v = r.get<double>("packing figures");
+    o.rattlers = r.get<long>("rattlers");
+    o.steps = r.get<long>("steps");
+    for (std::size_t i = 0; i < p.n; ++i)
+      o.grains.add(grain_element(x[i], p.radius[i], p.s.material));
+    p.out = std::move(o);
+    p.steps = p.out.steps;
+    p.phase = phase;
+    return;
   }
-  const double ratio = st.ratio();
-  out.steps = steps;
-  out.unbalanced_ratio = ratio;
+  p.phase = phase;
+  p.k = r.get<long>("growth chunk");
+  p.steps = r.get<long>("steps");
+  p.scale = r.get<double>("radius scale");
+  const double shift = r.get<double>("wall shift");
+  p.confining = r.get_bool("confining");
+  p.block_len = r.get<long>("block length");
+  p.block_done = r.get<long>("block done");
+  p.st.force = r.get<double>("contact force");
+  p.st.overlap = r.get<double>("overlap");
+  p.st.unbalanced = r.get<double>("unbalanced force");
+  p.st.count = r.get<long>("contacts");
+  p.st.grains = r.get<long>("grains");
+  if (p.k < 1 || p.steps < 0 || p.block_len < 0 || p.block_done < 0 || p.block_done > p.block_len ||
+      !(shift >= 0 && shift <= p.max_shift))
+    r.fail({}, "holds an impossible packing state");
+  // The radii and walls as they were, before the system checks its elements against them.
+  p.set_scale(p.scale);
+  if (shift > 0) p.move_walls(shift);
+  p.sys.load_state(r);
+}
 
-  // Touching pairs from the neighbour list (fresh for the final positions).
-  const Elements& fin = sys.elements();
-  const NeighborList* nl = sys.neighbors();
-  std::vector<long> touches(n, 0);
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::uint32_t m = nl->offsets()[i]; m < nl->offsets()[i + 1]; ++m) {
-      const std::uint32_t j = nl->neighbors()[m];
-      if (j >= n) continue;
-      const double reach = radius[i] + radius[j];
-      if ((fin.x[j] - fin.x[i]).squaredNorm() < reach * reach) {
-        out.touching.emplace_back(static_cast<std::uint32_t>(std::min<std::size_t>(i, j)),
-                                  static_cast<std::uint32_t>(std::max<std::size_t>(i, j)));
-        ++touches[i];
-        ++touches[j];
-      }
-    }
-  std::sort(out.touching.begin(), out.touching.end());
-  out.rattlers = std::count(touches.begin(), touches.end(), 0L);
-
-  for (std::size_t i = 0; i < n; ++i)
-    out.grains.add(grain_element(fin.x[i], radius[i], s.material));
-
-  // Porosity by seeded Monte Carlo points in the container (overlaps counted once).
-  {
-    Uniform pu(s.seed ^ 0x9e3779b97f4a7c15ULL);
-    const Grid grid(out.grains.x, s.r_outer + s.grain_r_max, s.grain_r_max);
-    long inside = 0;
-    for (long k = 0; k < kPorosityPoints; ++k) {
-      Vec3 p;
-      if (s.shape == PackingShape::Cube) {
-        p = Vec3(pu.in(-s.r_outer, s.r_outer), pu.in(-s.r_outer, s.r_outer),
-                 pu.in(-s.r_outer, s.r_outer));
-      } else {
-        for (;;) {
-          p = Vec3(pu.in(-s.r_outer, s.r_outer), pu.in(-s.r_outer, s.r_outer),
-                   pu.in(-s.r_outer, s.r_outer));
-          const double r2 = p.squaredNorm();
-          if (r2 <= s.r_outer * s.r_outer && r2 >= s.r_inner * s.r_inner) break;
-        }
-      }
-      if (grid.any_near(p, [&](std::uint32_t i) {
-            return (out.grains.x[i] - p).squaredNorm() < radius[i] * radius[i];
-          }))
-        ++inside;
-    }
-    const double solid = static_cast<double>(inside) / kPorosityPoints;
-    out.porosity = 1.0 - solid;
-    out.porosity_error = std::sqrt(solid * (1.0 - solid) / kPorosityPoints);
-  }
-  return out;
+PackedParticle pack_grains(const PackingSpec& spec) {
+  GrainPacker packer(spec);
+  while (!packer.done()) packer.advance(std::numeric_limits<long>::max());
+  return packer.result();
 }
 
 }  // namespace mdem

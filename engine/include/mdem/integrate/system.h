@@ -14,6 +14,7 @@
 #include "mdem/core/elements.h"
 #include "mdem/core/energy.h"
 #include "mdem/force/force_model.h"
+#include "mdem/io/state_io.h"
 #include "mdem/neighbor/neighbor_list.h"
 #include "mdem/neighbor/pair_table.h"
 
@@ -21,6 +22,17 @@ namespace mdem {
 
 class StateWriter;
 class StateReader;
+class System;
+
+// What acts on a system before each force evaluation: a protocol (loads, prescribed motion) or
+// an observer that samples every step. It saves and loads the state a run changes in it (none
+// by default); its owner (a job's stage) puts that in checkpoints.
+class Updater : public Stateful {
+ public:
+  virtual void apply(System& sys, double time) = 0;
+  void save_state(StateWriter&) const override {}
+  void load_state(StateReader&) override {}
+};
 
 // A run that went numerically wrong: says at which step, which element and the likely cause.
 class NumericalError : public std::runtime_error {
@@ -82,10 +94,17 @@ class System {
   }
   const std::vector<ForceModelPtr>& models() const { return models_; }
 
-  // Called before each force evaluation with the time it is for: protocols set external loads
-  // and prescribed velocities here (HOOMD's "updater").
-  using Updater = std::function<void(System&, double time)>;
-  void add_updater(Updater u) { updaters_.push_back(std::move(u)); }
+  // Updaters are called before each force evaluation with the time it is for, in the order
+  // added: protocols set external loads and prescribed velocities, observers that need every
+  // step sample it (HOOMD's "updater"). A job's stage installs its own (set_updaters).
+  void add_updater(std::shared_ptr<Updater> u);
+  // A plain function as an updater (tests, ad-hoc drivers); it has no checkpoint state.
+  void add_updater(std::function<void(System&, double time)> fn);
+  void set_updaters(std::vector<std::shared_ptr<Updater>> u) { updaters_ = std::move(u); }
+  const std::vector<std::shared_ptr<Updater>>& updaters() const { return updaters_; }
+  // PFC local damping α in [0, 1) from the next force evaluation on (a stage's damping); throws
+  // ConfigError outside the range.
+  void set_local_damping(double alpha);
 
   // Validates the settings, builds the neighbour list if any model needs one, evaluates forces
   // and energies, computes the critical step and picks or checks dt. Throws ConfigError for a dt
@@ -156,7 +175,7 @@ class System {
   Elements el_;
   IntegratorSettings settings_;
   std::vector<ForceModelPtr> models_;
-  std::vector<Updater> updaters_;
+  std::vector<std::shared_ptr<Updater>> updaters_;
   Domain domain_;
   PairTable pairs_;  // per-kind-pair table: the pair models' neighbour sub-lists
   ForceSink sink_;
@@ -171,6 +190,7 @@ class System {
   int threads_ = 1;
   bool initialized_ = false;
   bool dissipative_ = false;
+  bool local_damping_was_on_ = false;  // fd_/td_ may hold local damping to clear
 };
 
 }  // namespace mdem

@@ -130,7 +130,19 @@ class StateReader {
 };
 
 // Format version of everything written after the header; bump it when any save_state changes.
-inline constexpr std::uint32_t kCheckpointVersion = 1;
+// 2: staged jobs (the stage index, finished stages' results, then the current stage's state).
+inline constexpr std::uint32_t kCheckpointVersion = 2;
+
+// A part of a job that a run changes and a checkpoint must carry (a protocol, an observer, a
+// stage): it writes and reads its own state, so no job lists fields in a checkpoint by hand.
+// load_state reads exactly what save_state wrote, and throws CheckpointError (via
+// StateReader::fail) when the bytes belong to another part or another spec.
+class Stateful {
+ public:
+  virtual ~Stateful() = default;
+  virtual void save_state(StateWriter& w) const = 0;
+  virtual void load_state(StateReader& r) = 0;
+};
 
 // Magic "MDEMCKPT", version, and a probe of byte order and type sizes.
 void write_header(StateWriter& w);

@@ -19,6 +19,8 @@
 
 namespace mdem {
 
+class PackingStage;
+
 struct CompressionJobSpec {
   PackingSpec particle;
   GrainBondParams bond;  // material copied from the particle's
@@ -26,10 +28,15 @@ struct CompressionJobSpec {
   double viscous_ratio = 0.5;  // β of GrainDashpots; 0 = none (local damping: IntegratorSettings)
 };
 
+// Stages: "packing" (PackingStage, when the job packs its particle), then "compression" (the
+// platens' CompressionProtocol, with a tracker of the peak force and the loading stiffness).
+// The job's system, bonds and platens exist once the packing has finished (prepare_job, or
+// run_job past the packing); before that, system() is the packing's.
 class CompressionJob final : public Job {
  public:
-  // Packs the particle (pack_grains), bonds every touching pair, places the platens touching
-  // the particle's top and bottom. Throws std::invalid_argument for an impossible spec.
+  // Packs the particle (pack_grains, as the job's first stage), then bonds every touching pair,
+  // places the platens touching the particle's top and bottom. Throws std::invalid_argument for
+  // an impossible spec.
   CompressionJob(const CompressionJobSpec& spec, IntegratorSettings settings);
   // The same with a particle packed by the caller (e.g. carved out of a bulk packing); the spec's
   // particle gives the material, the largest grain radius and the platens' lateral size.
@@ -37,9 +44,10 @@ class CompressionJob final : public Job {
                  IntegratorSettings settings);
   CompressionJob(const CompressionJob&) = delete;
   CompressionJob& operator=(const CompressionJob&) = delete;
+  ~CompressionJob() override;
 
   std::string_view kind() const override { return "compression"; }
-  System& system() override { return sys_; }
+  System& system() override;
   double duration() const override;
   // time, displacement h (nm), platen force (nN, mean of both, compression positive), bonds
   // intact / yielded / broken, fragments, max and mean slip (nm), then the energy columns.
@@ -50,13 +58,11 @@ class CompressionJob final : public Job {
   // displacement at the end, residual height loss (initial minus current z extent of the grains),
   // bonds intact/yielded/broken, fragments, slip, energy-balance error, dt and critical dt.
   Summary summary() override;
-  std::string phase() const override;
-  bool can_checkpoint() const override { return true; }
-  void save_state(StateWriter& w) const override;
-  void load_state(StateReader& r) override;
   // Adds "slip_nm" (slip()) to snapshots.
   void decorate(Snapshot& s) const override;
 
+  // Whether the particle is packed and the job's system built (the accessors below need it).
+  bool built() const { return sys_ != nullptr; }
   // Slip vector magnitude per element (thesis Eq. 40): the mean over i's initial bonded
   // neighbours j of |x_ij − R·X_ij|, R the particle's best-fit rigid rotation since the start of
   // loading (Kabsch): frictionless platens let the particle turn freely, and turning is not
@@ -76,16 +82,26 @@ class CompressionJob final : public Job {
   std::size_t bottom_platen() const { return bottom_; }
   const CompressionProtocol& protocol() const { return *protocol_; }
   const PackedParticle& packing() const { return packed_; }
-  const GrainBond& bonds() const { return *bonds_; }
+  const GrainBond& bonds() const;
 
  private:
+  class Tracker;
+  void stage_finished(std::size_t k) override;
+  // Builds the system from the packed particle: platens, bonds, contacts, dashpots, references.
+  void build(PackedParticle packed);
+  void add_compression_stage();
+  const System& sys() const;
+
+  CompressionJobSpec spec_;
+  IntegratorSettings settings_;
+  PackingStage* packing_stage_ = nullptr;  // owned by the stage list; null when carved
   PackedParticle packed_;
-  System sys_;
+  std::unique_ptr<System> sys_;
   GrainBond* bonds_ = nullptr;
   std::shared_ptr<CompressionProtocol> protocol_;
+  std::shared_ptr<Tracker> tracker_;
   std::size_t top_ = 0, bottom_ = 0;
   static std::vector<EnergyTerm> energy_terms();
-  void track();           // updater: peak force and the first loading's stiffness, one step behind
   double height() const;  // z extent of the grains (nm)
 
   std::size_t n_grains_ = 0, initial_bonds_ = 0;
@@ -93,12 +109,6 @@ class CompressionJob final : public Job {
   // Each grain's initial bonded neighbours (CSR).
   std::vector<std::uint32_t> slip_offsets_, slip_partners_;
   double z_top0_ = 0, z_bottom0_ = 0, height0_ = 0;
-  // Tracked every step (saved in checkpoints): the force of the last evaluation pairs with the
-  // displacement at the previous updater call.
-  double peak_force_ = 0, peak_at_ = 0;
-  double prev_disp_ = 0;
-  bool have_prev_ = false, prev_loading_ = false;
-  double sum_fh_ = 0, sum_hh_ = 0;  // least squares F = k·h over the first half of the loading
 };
 
 }  // namespace mdem

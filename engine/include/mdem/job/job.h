@@ -1,8 +1,10 @@
 #pragma once
-// A job: a scene and its protocol on a System, with the observables it reports (HOOMD's
+// A job: a scene and its stages on a System, with the observables it reports (HOOMD's
 // "analyzers"), and one run loop that every front end (the CLI in-process, the daemon's workers)
-// shares: time series frames and snapshots at their cadences, progress, cancellation.
+// shares: stages in order, time series frames and snapshots at their cadences, progress,
+// cancellation and checkpoints in any stage.
 #include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -12,6 +14,7 @@
 #include "mdem/core/energy.h"
 #include "mdem/integrate/system.h"
 #include "mdem/io/state_io.h"
+#include "mdem/job/stage.h"
 #include "mdem/observe/snapshot.h"
 
 namespace mdem {
@@ -20,32 +23,69 @@ namespace mdem {
 using SummaryValue = std::variant<double, long, std::string>;
 using Summary = std::vector<std::pair<std::string, SummaryValue>>;
 
+// A job: a scene and an ordered list of stages (job/stage.h) on it, with the observables it
+// reports. Its parts that a run changes (stages with their protocols and observers, trackers the
+// job reports from) are Stateful and listed once (add_stage, add_state): checkpoints save and
+// load them in that order, no job writes a checkpoint layout by hand.
 class Job {
  public:
   virtual ~Job() = default;
   virtual std::string_view kind() const = 0;
+  // The system the job advances now: the job's own, or, while a stage that builds the scene runs
+  // (a packing), that stage's.
   virtual System& system() = 0;
-  // Simulated time the protocol needs (ps).
+  // Simulated time of the reporting stages (ps), as far as known before the run.
   virtual double duration() const = 0;
   // Names of the time-series columns (units in the names), and one row at the current state.
   virtual std::vector<std::string> columns() const = 0;
   virtual std::vector<double> observe() = 0;
   // The protocol's figures at the current state (call after the run).
   virtual Summary summary() = 0;
-  // A few words on where the protocol is ("loading", "holding"), for progress lines.
-  virtual std::string phase() const { return {}; }
+  // Where the run is ("packing", "loading", "holding"): the current stage's phase.
+  virtual std::string phase() const;
   // Adds the job's own per-element values for colouring (e.g. a slip vector) to a snapshot that
   // run_job captured at the current state.
   virtual void decorate(Snapshot&) const {}
 
-  // Checkpoints: the system and every bit of protocol and observer state a run changes, so that
-  // a job built anew from the same spec, with the same thread count, and loaded from the bytes,
-  // continues under run_job bit-identically. Save at a step boundary (JobObserver::checkpoint).
+  const std::vector<std::unique_ptr<Stage>>& stages() const { return stages_; }
+  // The stage under way (stages().size() once all finished), whether it has begun, and the
+  // steps of the stages before it.
+  std::size_t stage_index() const { return index_; }
+  bool stage_begun() const { return begun_; }
+  long finished_steps() const { return finished_steps_; }
+  Stage* current_stage() const { return index_ < stages_.size() ? stages_[index_].get() : nullptr; }
+
+  // Checkpoints: the stage index, what the finished stages handed on, the current stage's state
+  // (its system, protocol and observers) and the job's listed parts, so that a job built anew
+  // from the same spec, with the same thread count, and loaded from the bytes, continues under
+  // run_job bit-identically, in any stage. Save at a step boundary (JobObserver::checkpoint).
   // load_state throws CheckpointError for a checkpoint of another scene, loading or thread count;
-  // the job must be discarded then. Kinds that cannot checkpoint throw CheckpointError.
-  virtual bool can_checkpoint() const { return false; }
-  virtual void save_state(StateWriter& w) const;
-  virtual void load_state(StateReader& r);
+  // the job must be discarded then.
+  virtual bool can_checkpoint() const { return true; }
+  void save_state(StateWriter& w) const;
+  void load_state(StateReader& r);
+
+  // The run loop's moves (run_job): begin the current stage (install it, Stage::begin), and
+  // leave it once finished (stage_finished, then the next stage is installed).
+  void begin_stage();
+  void finish_stage();
+
+ protected:
+  // Appends a stage; the first is installed at once, so the job's system runs under its
+  // protocol even when driven by hand (System::run).
+  Stage& add_stage(std::unique_ptr<Stage> stage);
+  // A part of the job a run changes that no stage owns (e.g. a tracker of peak values).
+  void add_state(std::shared_ptr<Stateful> part);
+  // Called when stage k has finished, in the run or when a checkpoint taken after it loads: e.g.
+  // the job builds its system from what a packing stage made.
+  virtual void stage_finished(std::size_t /*k*/) {}
+
+ private:
+  std::vector<std::unique_ptr<Stage>> stages_;
+  std::vector<std::shared_ptr<Stateful>> parts_;
+  std::size_t index_ = 0;
+  bool begun_ = false;
+  long finished_steps_ = 0;
 };
 
 // A job's checkpoint as bytes: header (format and version), the job's kind, then its state.
@@ -64,10 +104,15 @@ struct JobCadence {
   double snapshot_every_ps = 0.0;  // 0: no snapshots
 };
 
+// Where a run is. step and total_steps count over all stages (total_steps grows when a later
+// stage's length becomes known); the stage_ fields are the current stage's.
 struct JobProgress {
   long step = 0, total_steps = 0;
   double time_ps = 0;
   std::string phase;
+  std::string stage{};
+  int stage_index = 0, stage_count = 1;
+  long stage_step = 0, stage_total_steps = 0;
 };
 
 // What the run loop reports to; every callback may be empty.
@@ -76,23 +121,31 @@ struct JobObserver {
   std::function<void(const Snapshot&)> snapshot;
   std::function<void(const JobProgress&)> progress;  // about every 0.5 % of the run
   std::function<bool()> cancelled;                   // polled between chunks of steps
-  // Called after every chunk of steps (often: every few steps on a large system), with the state
-  // consistent at that step and everything due at it reported: the caller may save_state now.
+  // Called after every chunk of steps in every stage (often: every few steps on a large system),
+  // with the state consistent and everything due reported: the caller may save_state now. The
+  // step is that of the job's time series (the frames' step): 0 while a stage that builds the
+  // scene runs.
   std::function<void(long step)> checkpoint;
 };
 
 struct JobRunResult {
-  long steps = 0;
+  long steps = 0;  // the step of the time series reached (the job's system's step)
   bool cancelled = false;
 };
 
-// Initializes the system, then runs it to step ceil(duration / dt), reporting a frame at step 0,
-// every frame_every_ps and at the end, and snapshots likewise (none when snapshot_every_ps is 0).
-// A job whose system is past step 0 (restored from a checkpoint) continues from its step without
-// initializing or reporting step 0 again: every cadence counts absolute steps, so it reports
-// exactly what an uninterrupted run reports after that step. JobRunResult::steps is the step
-// reached. Throws NumericalError or ConfigError from the system; what was reported before stays
-// valid.
+// Runs the job's stages in order from where it is: a stage that has not begun is installed, its
+// system initialized if at step 0 (the time series' step 0 is reported then: frame, snapshot),
+// and run until its stop condition holds, reporting frames every frame_every_ps and at the
+// stage's end, snapshots likewise (none when snapshot_every_ps is 0), progress about every 0.5 %
+// of the stage. A job restored from a checkpoint continues inside its stage without initializing
+// or reporting again: every cadence counts the system's absolute steps, so it reports exactly
+// what an uninterrupted run reports after that step. Throws NumericalError or ConfigError from
+// the system; what was reported before stays valid.
 JobRunResult run_job(Job& job, const JobCadence& cadence, const JobObserver& observer);
+
+// Runs the stages that build the scene (those before the first reporting stage), without
+// reports, and installs the first reporting stage: the job's own system then exists, ready for
+// run_job or to be driven by hand.
+void prepare_job(Job& job);
 
 }  // namespace mdem

@@ -41,7 +41,7 @@ class TwistJob final : public Job {
   // Throws std::invalid_argument for an impossible rope or load (see build_hex_rope and
   // TwistProtocol).
   TwistJob(const TwistJobSpec& spec, IntegratorSettings settings);
-  // Its updaters hold pointers into the job: it stays where it was built.
+  // Its stage and observers refer to the rope and system it holds: it stays where it was built.
   TwistJob(const TwistJob&) = delete;
   TwistJob& operator=(const TwistJob&) = delete;
 
@@ -51,14 +51,19 @@ class TwistJob final : public Job {
   std::vector<std::string> columns() const override;
   std::vector<double> observe() override;
   Summary summary() override;
-  std::string phase() const override;
-  bool can_checkpoint() const override { return true; }
-  void save_state(StateWriter& w) const override;
-  void load_state(StateReader& r) override;
 
   TwistReport report();
   const Rope& rope() const { return rope_; }
   const TwistProtocol& protocol() const { return *protocol_; }
+
+  // Largest values seen at any report (the summary's figures are those at the end: after
+  // unloading, the end shift is the residual twist and these are the loaded ones).
+  struct Peaks final : Stateful {
+    int max_charge = 0;
+    double twist = 0, shift = 0;
+    void save_state(StateWriter& w) const override;
+    void load_state(StateReader& r) override;
+  };
 
  private:
   static std::vector<EnergyTerm> energy_terms();
@@ -66,12 +71,8 @@ class TwistJob final : public Job {
   Rope rope_;
   System sys_;
   std::shared_ptr<TwistProtocol> protocol_;
-  std::shared_ptr<ShiftAngle> shift_;
-  double shift_angle_ = 0;  // radians, kept continuous by an updater
-  // Largest values seen at any report (the summary's figures are those at the end: after
-  // unloading, the end shift is the residual twist and these are the loaded ones).
-  int max_charge_ = 0;
-  double peak_twist_ = 0, peak_shift_ = 0;
+  std::shared_ptr<ShiftAngleSampler> shift_;
+  std::shared_ptr<Peaks> peaks_;
 };
 
 }  // namespace mdem

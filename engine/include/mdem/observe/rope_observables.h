@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "mdem/core/elements.h"
+#include "mdem/integrate/system.h"
 #include "mdem/scene/hex_rope.h"
 
 namespace mdem {
@@ -74,6 +75,26 @@ class ShiftAngle {
   const Rope* rope_;
   std::vector<Vec3> ref_a_, ref_b_;  // offsets from each grip's centroid, as built
   double angle_ = 0;
+};
+
+// The shift angle sampled every `every` steps before the force evaluation (counted by the
+// system, so a job restored from a checkpoint samples at the same steps): unwrapping needs
+// samples less than a half turn apart. An observer of a job's stage.
+class ShiftAngleSampler final : public Updater {
+ public:
+  ShiftAngleSampler(const Elements& reference, const Rope& rope, long every = 10);
+  void apply(System& sys, double t) override;
+  // Samples now (a report between samples); the angle in radians.
+  double sample(const Elements& el);
+  double angle() const { return value_; }
+  void save_state(StateWriter& w) const override;
+  void load_state(StateReader& r) override;
+
+ private:
+  ShiftAngle shift_;
+  const Rope* rope_;
+  long every_;
+  double value_ = 0;  // the last sample (radians)
 };
 
 }  // namespace mdem

@@ -5,7 +5,7 @@
 #include <memory>
 #include <string>
 
-#include "mdem/integrate/system.h"
+#include "mdem/protocol/protocol.h"
 
 namespace mdem {
 
@@ -15,21 +15,23 @@ struct CompressionLoading {
   bool unload = true;            // return to the start after the peak
 };
 
-class CompressionProtocol {
+class CompressionProtocol final : public Protocol {
  public:
   // top, bottom: platen element indices (normals −z and +z). Throws std::invalid_argument for a
   // non-positive or non-finite speed or peak.
   CompressionProtocol(CompressionLoading loading, std::size_t top, std::size_t bottom);
-  // Sets the platens' prescribed velocities for time t (translation prescribed, rotation fixed);
-  // register as a System updater. With the system's step dt known, the velocity is the motion
-  // law's mean over [t, t + dt], so the platens follow the law exactly at every step.
-  void operator()(System& sys, double t) const;
+  // Sets the platens' prescribed velocities for time t (translation prescribed, rotation fixed).
+  // With the system's step dt known, the velocity is the motion law's mean over [t, t + dt], so
+  // the platens follow the law exactly at every step. Stateless: nothing to checkpoint.
+  void apply(System& sys, double t) override;
+  // The platens' element indices, when they are known only once the scene is built.
+  void set_platens(std::size_t top, std::size_t bottom);
   double duration() const;   // h/(2·speed) loading, as long again unloading
   double peak_time() const;  // h/(2·speed)
   // Total approach (nm) at time t (exact, from the motion law).
   double displacement(double t) const;
-  bool loading(double t) const;       // true before the peak
-  std::string phase(double t) const;  // "loading", "unloading", or "done" after duration()
+  bool loading(double t) const;                // true before the peak
+  std::string phase(double t) const override;  // "loading", "unloading", or "done" after duration()
   const CompressionLoading& params() const { return l_; }
 
  private:

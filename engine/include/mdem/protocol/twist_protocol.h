@@ -24,13 +24,11 @@
 #include <vector>
 
 #include "mdem/core/math.h"
+#include "mdem/protocol/protocol.h"
 
 namespace mdem {
 
-class System;
 struct Elements;
-class StateWriter;
-class StateReader;
 
 enum class TwistBoundary { ConstantMoment, TwistRelaxation };
 
@@ -57,7 +55,7 @@ struct TwistLoading {
   GripLoad grip_load = GripLoad::RigidGrip;
 };
 
-class TwistProtocol {
+class TwistProtocol final : public Protocol {
  public:
   // Throws std::invalid_argument for a non-positive or non-finite torque or rate, negative hold
   // times, empty grips, or a zero axis.
@@ -72,7 +70,8 @@ class TwistProtocol {
 
   // The updater: sets the grips' loads and DOF modes for time t. Grip b (z > 0) gets +T about
   // the axis, grip a gets −T.
-  void apply(System& sys, double t);
+  void apply(System& sys, double t) override;
+  std::string phase(double t) const override { return std::string(twist_phase_name(phase_at(t))); }
 
   const TwistLoading& loading() const { return loading_; }
   const std::vector<std::size_t>& grip_a() const { return grip_a_; }
@@ -81,8 +80,8 @@ class TwistProtocol {
 
   // The phase apply() last saw (it acts on phase changes), for checkpoints. load_state throws
   // CheckpointError when the checkpoint's loading differs from this protocol's.
-  void save_state(StateWriter& w) const;
-  void load_state(StateReader& r);
+  void save_state(StateWriter& w) const override;
+  void load_state(StateReader& r) override;
 
  private:
   void load_grip(Elements& el, const std::vector<std::size_t>& grip, double torque) const;

@@ -9,12 +9,16 @@
 // caller removes the walls by not adding them again. Same seed and thread count: bit-identical
 // grains on every machine.
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "mdem/core/elements.h"
+#include "mdem/io/state_io.h"
 #include "mdem/scene/grain.h"
 
 namespace mdem {
+
+class System;
 
 enum class PackingShape : std::uint8_t { Shell = 0, Cube = 1 };
 
@@ -47,10 +51,49 @@ struct PackedParticle {
   double wall_shift = 0;
 };
 
-// Throws std::invalid_argument naming the field for an impossible spec (radii, porosity outside
-// (0.2, 0.95), a grain larger than the shell's thickness, more than 5 million grains), and
-// std::runtime_error when max_steps pass without equilibrium.
+// Packs to the end: GrainPacker advanced until done. Throws std::invalid_argument naming the
+// field for an impossible spec (radii, porosity outside (0.2, 0.95), a grain larger than the
+// shell's thickness, more than 5 million grains), and std::runtime_error when max_steps pass
+// without equilibrium.
 PackedParticle pack_grains(const PackingSpec& spec);
+
+// The packing as a process a run loop advances a little at a time (a job's packing stage): the
+// same operations in the same order as one pack_grains call, so the same spec and thread count
+// give the same particle bit for bit however the work is split, cancelled or checkpointed.
+class GrainPacker {
+ public:
+  // Validates the spec, draws and places the grains, builds the packing system (grains, walls,
+  // local damping 0.7); the relaxation has not started. Throws as pack_grains.
+  explicit GrainPacker(const PackingSpec& spec);
+  ~GrainPacker();
+  GrainPacker(const GrainPacker&) = delete;
+  GrainPacker& operator=(const GrainPacker&) = delete;
+
+  // Puts the packing system back as built when nothing has run yet (a caller may have
+  // initialized it in between, e.g. to read its step, which recomputes dt at the shrunk radii);
+  // does nothing once the packing has started.
+  void begin();
+  bool done() const;
+  // Advances by whole units of the packing (10 steps, or a check of the equilibrium) until at
+  // least `steps` more steps are done or the packing is done; a unit may overrun the request by
+  // up to 9 steps. Throws std::runtime_error when max_steps pass without equilibrium.
+  void advance(long steps);
+  long steps() const;  // packing steps so far
+  const PackingSpec& spec() const;
+  // The packing's own system (grains and walls), for progress and inspection.
+  System& system();
+  const PackedParticle& result() const;  // once done()
+
+  // Between units: the packing's progress and, while it runs, its system; once done, the packed
+  // particle. load_state throws CheckpointError for a checkpoint of another spec.
+  void save_state(StateWriter& w) const;
+  void load_state(StateReader& r);
+
+  struct Impl;  // defined in grain_packing.cpp
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
 
 // Connected components of a graph of n vertices with the given edges (union–find): used for the
 // fragment count of a bonded particle.
