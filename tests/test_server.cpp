@@ -11,8 +11,8 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
-#include "daemon.h"
 #include "grpc/health/v1/health.grpc.pb.h"
+#include "server_support.h"
 
 namespace {
 
@@ -22,71 +22,6 @@ using mdem::v1::JobInfo;
 using mdem::v1::JobSpec;
 using mdem::v1::JobState;
 using Clock = std::chrono::steady_clock;
-
-// 7 tubes x 10 segments = 70 elements, seeded at 300 K so that every step changes the state.
-JobSpec small_spec(double hold_ps, double snapshot_every_ps = 0, double energy_every_ps = 1) {
-  JobSpec s;
-  s.set_name("test");
-  s.set_seed(7);
-  s.mutable_run()->set_threads(1);
-  s.mutable_outputs()->set_energy_every_ps(energy_every_ps);
-  s.mutable_outputs()->set_snapshot_every_ps(snapshot_every_ps);
-  auto* t = s.mutable_twist();
-  t->set_layers(2);
-  t->set_length_nm(13.56);
-  t->set_torque_nn_nm(2);
-  t->set_torque_rate_nn_nm_per_ps(1);
-  t->set_hold_ps(hold_ps);
-  t->set_temperature_k(300);
-  return s;
-}
-
-bool finished(JobState s) {
-  return s == mdem::v1::SUCCEEDED || s == mdem::v1::FAILED || s == mdem::v1::CANCELLED;
-}
-
-// Polls until pred(job) or timeout; returns the last JobInfo.
-template <class Pred>
-JobInfo wait_for(const DaemonProcess& d, const std::string& id, Pred pred, double timeout_s = 120) {
-  const auto end = Clock::now() + std::chrono::duration<double>(timeout_s);
-  JobInfo info;
-  while (Clock::now() < end) {
-    info = get(d, kRootToken, id);
-    if (pred(info)) return info;
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  ADD_FAILURE() << "timed out waiting on job " << id << " (state "
-                << mdem::v1::JobState_Name(info.state()) << ", step " << info.step() << ")";
-  return info;
-}
-
-JobInfo wait_finished(const DaemonProcess& d, const std::string& id, double timeout_s = 120) {
-  return wait_for(
-      d, id, [](const JobInfo& j) { return finished(j.state()); }, timeout_s);
-}
-
-std::vector<JobEvent> of_kind(const std::vector<JobEvent>& ev, JobEvent::EventCase k) {
-  std::vector<JobEvent> out;
-  for (const JobEvent& e : ev)
-    if (e.event_case() == k) out.push_back(e);
-  return out;
-}
-
-void expect_contiguous(const std::vector<JobEvent>& ev, long first = 1) {
-  for (std::size_t k = 0; k < ev.size(); ++k)
-    ASSERT_EQ(ev[k].seq(), first + static_cast<long>(k)) << "gap or duplicate at index " << k;
-}
-
-// step -> frame values, failing on a step seen twice.
-std::map<long, std::vector<double>> frames_by_step(const std::vector<JobEvent>& ev) {
-  std::map<long, std::vector<double>> m;
-  for (const JobEvent& e : of_kind(ev, JobEvent::kFrame)) {
-    const auto& f = e.frame();
-    EXPECT_FALSE(m.count(f.step())) << "frame at step " << f.step() << " twice";
-    m[f.step()] = {f.values().begin(), f.values().end()};
-  }
-  return m;
-}
 
 // step -> the concatenated bytes of that snapshot.
 std::map<long, std::string> snapshots_by_step(const std::vector<JobEvent>& ev) {
@@ -426,10 +361,7 @@ TEST(Server, CorruptCheckpointFailsThatJobOnly) {
   DaemonProcess d(fresh_dir("corrupt"), {"--checkpoint-every", "0.2"});
   const std::string id = submit_ok(d, kAliceToken, "victim", small_spec(200));
   const std::string other = submit_ok(d, kBobToken, "other", small_spec(10));
-  wait_for(d, id, [](const JobInfo& j) { return j.step() > 2000; });
-  std::this_thread::sleep_for(std::chrono::milliseconds(400));
-  d.kill9();
-  const fs::path ckpt = d.data_dir() / "checkpoints" / (id + ".ckpt");
+  const fs::path ckpt = kill_after_checkpoint(d, id);
   ASSERT_TRUE(fs::exists(ckpt));
   {
     std::fstream f(ckpt, std::ios::in | std::ios::out | std::ios::binary);

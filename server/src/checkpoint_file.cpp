@@ -1,6 +1,7 @@
 #include "checkpoint_file.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <zlib.h>
 
@@ -8,8 +9,8 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
+
+#include "fault_injection.h"
 
 namespace mdem::server {
 namespace {
@@ -65,6 +66,7 @@ void write_checkpoint(const std::string& path, const CheckpointData& data) {
   put(header, data.state.size(), 8);
   put(header, crc_of(data.state), 4);
   const std::string tmp = path + ".tmp";
+  if (auto injected = injected_write_failure()) fail(tmp, "cannot write: " + *injected);
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
   if (fd < 0) fail(tmp, std::string("cannot create: ") + std::strerror(errno));
   try {
@@ -91,10 +93,39 @@ void write_checkpoint(const std::string& path, const CheckpointData& data) {
   }
 }
 
+namespace {
+
+// The whole file; errors name the file and the system's reason (a directory in its place too).
+std::string read_all(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) fail(path, std::string("cannot open: ") + std::strerror(errno));
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    fail(path,
+         S_ISDIR(st.st_mode) ? "is a directory, not a checkpoint file" : "is not a regular file");
+  }
+  std::string bytes;
+  char buf[1 << 16];
+  while (true) {
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const std::string why = std::strerror(errno);
+      ::close(fd);
+      fail(path, "cannot read: " + why);
+    }
+    if (n == 0) break;
+    bytes.append(buf, static_cast<std::size_t>(n));
+  }
+  ::close(fd);
+  return bytes;
+}
+
+}  // namespace
+
 CheckpointData read_checkpoint(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail(path, "cannot open (missing or unreadable)");
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string bytes = read_all(path);
   if (bytes.size() < kHeaderBytes)
     fail(path, "truncated: " + std::to_string(bytes.size()) + " bytes, shorter than its header");
   if (std::memcmp(bytes.data(), kMagic, 8) != 0) fail(path, "not an mdem checkpoint (bad magic)");

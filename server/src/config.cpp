@@ -92,8 +92,14 @@ void load_file(DaemonConfig& c, const std::string& path) {
   }
   if (root.IsNull()) return;
   if (!root.IsMap()) throw ConfigError("config file '" + path + "': expected a mapping of keys");
+  std::map<std::string, int> seen;  // key -> its line
   for (const auto& kv : root) {
     const std::string key = kv.first.as<std::string>();
+    const int line = kv.first.Mark().line + 1;
+    if (auto [it, fresh] = seen.emplace(key, line); !fresh)
+      throw ConfigError("config file '" + path + "': key '" + key + "' given twice (lines " +
+                        std::to_string(it->second) + " and " + std::to_string(line) +
+                        "); give each key once");
     auto it = setters().find(key);
     if (it == setters().end()) {
       std::string allowed;

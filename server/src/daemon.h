@@ -12,11 +12,15 @@
 #include "job_service.h"
 #include "job_store.h"
 #include "scheduler.h"
+#include "storage_health.h"
 #include "tokens.h"
 
 namespace mdem::server {
 
 // The daemon cannot start: the message says what to fix.
+// The largest request mdemd reads (gRPC refuses more with RESOURCE_EXHAUSTED).
+constexpr int kMaxRequestBytes = 4 << 20;
+
 struct StartupError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
@@ -34,6 +38,7 @@ class Daemon {
  private:
   DaemonConfig config_;
   TokenTable tokens_;
+  std::unique_ptr<StorageHealth> storage_;  // before store_: closed after the database
   std::unique_ptr<JobStore> store_;
   EventHub hub_;
   std::unique_ptr<EventWriter> writer_;

@@ -2,7 +2,12 @@
 
 #include <spdlog/spdlog.h>
 
+#include "fault_injection.h"
+
 namespace mdem::server {
+namespace {
+constexpr auto kRetryEvery = std::chrono::milliseconds(500);
+}  // namespace
 
 long EventHub::generation() const {
   std::lock_guard lock(mu_);
@@ -66,6 +71,16 @@ void EventChannel::flush() {
   if (!error_.empty()) throw SqliteError(error_);
 }
 
+bool EventChannel::flush_retrying(const std::function<bool()>& give_up) {
+  std::unique_lock lock(mu_);
+  const long target = pushed_;
+  while (committed_ < target) {
+    if (give_up()) return false;
+    flushed_.wait_for(lock, std::chrono::milliseconds(200));
+  }
+  return true;
+}
+
 void EventChannel::wake_writer() {
   std::lock_guard lock(writer_->mu_);
   writer_->wake_.notify_one();
@@ -99,7 +114,8 @@ void EventWriter::drain(EventChannel& ch) {
   std::vector<v1::JobEvent> batch;
   {
     std::lock_guard lock(ch.mu_);
-    if (ch.pending_.empty() || !ch.error_.empty()) return;
+    if (ch.pending_.empty()) return;
+    if (!ch.error_.empty() && std::chrono::steady_clock::now() < ch.retry_at_) return;
     batch.assign(std::make_move_iterator(ch.pending_.begin()),
                  std::make_move_iterator(ch.pending_.end()));
     ch.pending_.clear();
@@ -108,17 +124,35 @@ void EventWriter::drain(EventChannel& ch) {
   const long n = static_cast<long>(batch.size());
   std::string error;
   try {
-    store_.append(ch.job_id(), std::move(batch));
+    if (auto injected = injected_write_failure())
+      throw SqliteError("job database: cannot log an event: " + *injected);
+    store_.append(ch.job_id(), batch);
   } catch (const std::exception& e) {
     error = e.what();
-    spdlog::error("event=log_failed job={} error=\"{}\"", ch.job_id(), error);
   }
   {
     std::lock_guard lock(ch.mu_);
-    if (error.empty())
+    if (error.empty()) {
       ch.committed_ += n;
-    else
+      if (!ch.error_.empty())
+        spdlog::info("event=log_recovered job={} note=\"the events held back are logged\"",
+                     ch.job_id());
+      ch.error_.clear();
+    } else {
+      // Kept ahead of what was pushed since, and retried: the log has no gap, the job no wait.
+      std::size_t bytes = 0;
+      for (const v1::JobEvent& e : batch) bytes += e.ByteSizeLong();
+      ch.pending_.insert(ch.pending_.begin(), std::make_move_iterator(batch.begin()),
+                         std::make_move_iterator(batch.end()));
+      ch.pending_bytes_ += bytes;
+      if (ch.error_.empty())
+        spdlog::error(
+            "event=log_failed job={} error=\"{}\" note=\"the job runs on; its events are held "
+            "(frames beyond the buffer coalesced) and retried every 0.5 s\"",
+            ch.job_id(), error);
       ch.error_ = error;
+      ch.retry_at_ = std::chrono::steady_clock::now() + kRetryEvery;
+    }
   }
   ch.flushed_.notify_all();
 }

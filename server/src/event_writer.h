@@ -4,11 +4,13 @@
 // transaction per job per round) and wakes the watchers. When a job outruns the disk by more than
 // its buffer, droppable events (energy frames, snapshots, progress) are not logged - a Coalesced
 // event says how many - while state changes, columns, logs and the final report always are
-// (service.md "Streaming").
+// (service.md "Streaming"). When a commit fails (a full disk), the events are kept, in order, and
+// retried every half second; the job runs on, and its log catches up once the disk takes writes.
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <deque>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -44,9 +46,13 @@ class EventChannel {
   // Appends a group (e.g. the chunks of one snapshot) that is logged whole or not at all:
   // dropped when the buffer holds more than its capacity.
   void push_droppable(std::vector<v1::JobEvent> group, long step, bool is_snapshot);
-  // Blocks until everything pushed so far is committed. Throws SqliteError when the writer
-  // could not commit this job's events.
+  // Blocks until everything pushed so far is committed. Throws SqliteError at once while the
+  // writer cannot commit this job's events (they are kept and retried).
   void flush();
+  // Blocks until everything pushed so far is committed, through failed commits (the writer
+  // retries them). Returns false, with events still uncommitted, once give_up() is true (asked
+  // every 0.2 s).
+  bool flush_retrying(const std::function<bool()>& give_up);
   const std::string& job_id() const { return job_id_; }
 
  private:
@@ -63,7 +69,8 @@ class EventChannel {
   std::size_t pending_bytes_ = 0;
   long pushed_ = 0, committed_ = 0;
   long dropped_frames_ = 0, dropped_snapshots_ = 0, dropped_up_to_ = 0;
-  std::string error_;
+  std::string error_;  // why the last commit failed; empty once one succeeds
+  std::chrono::steady_clock::time_point retry_at_;
 };
 
 class EventWriter {

@@ -8,6 +8,7 @@
 #include "mdem/job_runner.h"
 #include "mdem/spec.h"
 #include "mdem/spec_job.h"
+#include "request_check.h"
 
 namespace mdem::server {
 namespace {
@@ -17,6 +18,13 @@ using grpc::StatusCode;
 
 constexpr int kWatchPageEvents = 64;
 constexpr std::size_t kWatchPageBytes = 4 << 20;
+
+// The data directory cannot keep a new job: nothing acknowledged may be lost.
+Status unavailable(const std::string& why, const char* what_happened) {
+  return Status(StatusCode::UNAVAILABLE, "mdemd cannot keep new jobs now: " + why + "; " +
+                                             what_happened +
+                                             " (health is NOT_SERVING until it is fixed)");
+}
 
 Status internal(const std::exception& e) {
   spdlog::error("event=rpc_failed error=\"{}\"", e.what());
@@ -77,6 +85,11 @@ Status JobServiceImpl::SubmitJob(grpc::ServerContext* ctx, const v1::SubmitJobRe
       return Status(StatusCode::INVALID_ARGUMENT,
                     "request_id: '" + req->request_id().substr(0, 200) +
                         "' is not 1..128 characters of [A-Za-z0-9._:-]");
+    if (const std::string bad = unreadable_fields(*req); !bad.empty())
+      return Status(StatusCode::INVALID_ARGUMENT,
+                    "the request has fields mdemd cannot read (unknown, or sent with another "
+                    "wire type than declared); nothing was queued:\n" +
+                        bad);
     v1::JobSpec spec;
     try {
       spec = spec::finalize(req->spec());
@@ -111,13 +124,24 @@ Status JobServiceImpl::SubmitJob(grpc::ServerContext* ctx, const v1::SubmitJobRe
                     "the job needs " + std::to_string(total_steps) + " steps, above this " +
                         "daemon's limit max_steps = " + std::to_string(config_.max_steps) +
                         "; shorten it or raise dt");
+    if (const std::string why = storage_.check(); !why.empty())
+      return unavailable(why, "nothing was queued");
     SubmitResult r;
     try {
       r = store_.submit(who.user, req->request_id(), spec, std::string(job_kind_name(spec)),
                         elements, total_steps, threads, config_.max_queued_per_user);
     } catch (const LimitError& e) {
       return Status(StatusCode::RESOURCE_EXHAUSTED, e.what());
+    } catch (const SqliteError& e) {  // e.g. the disk is full
+      const std::string why = storage_.check();
+      return unavailable(why.empty() ? e.what() : why + " (" + e.what() + ")",
+                         "nothing was queued");
     }
+    // Acknowledged only if what was committed is still where a restart will look for it.
+    if (const std::string why = storage_.check(); !why.empty())
+      return unavailable(why,
+                         "the job may not have been kept: submit again with the same "
+                         "request id once it is fixed");
     *resp->mutable_job() = r.job.info();
     resp->set_created(r.created);
     if (r.created) {

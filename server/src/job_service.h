@@ -7,6 +7,7 @@
 #include "job_store.h"
 #include "mdem/v1/service.grpc.pb.h"
 #include "scheduler.h"
+#include "storage_health.h"
 #include "tokens.h"
 
 namespace mdem::server {
@@ -14,8 +15,13 @@ namespace mdem::server {
 class JobServiceImpl final : public v1::JobService::Service {
  public:
   JobServiceImpl(const DaemonConfig& config, const TokenTable& tokens, JobStore& store,
-                 Scheduler& scheduler, const EventHub& hub)
-      : config_(config), tokens_(tokens), store_(store), scheduler_(scheduler), hub_(hub) {}
+                 Scheduler& scheduler, const EventHub& hub, StorageHealth& storage)
+      : config_(config),
+        tokens_(tokens),
+        store_(store),
+        scheduler_(scheduler),
+        hub_(hub),
+        storage_(storage) {}
 
   grpc::Status SubmitJob(grpc::ServerContext* ctx, const v1::SubmitJobRequest* req,
                          v1::SubmitJobResponse* resp) override;
@@ -43,6 +49,7 @@ class JobServiceImpl final : public v1::JobService::Service {
   JobStore& store_;
   Scheduler& scheduler_;
   const EventHub& hub_;
+  StorageHealth& storage_;  // a submit is acknowledged only while the data directory can keep it
 };
 
 }  // namespace mdem::server

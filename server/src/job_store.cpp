@@ -296,7 +296,7 @@ bool JobStore::cancel_queued(const std::string& id, const std::string& reason) {
   return true;
 }
 
-long JobStore::append(const std::string& job_id, std::vector<v1::JobEvent> events) {
+long JobStore::append(const std::string& job_id, std::vector<v1::JobEvent>& events) {
   std::lock_guard lock(db_.mutex());
   Transaction t(db_);
   const long last = append_locked(job_id, events);

@@ -70,8 +70,9 @@ class JobStore {
 
   // Appends events in one transaction and returns the last sequence number. A StateChange also
   // sets the job's state and reason (and started/finished times), a FinalReport its report, and
-  // frames, snapshots, progress and columns advance what the job has logged.
-  long append(const std::string& job_id, std::vector<v1::JobEvent> events);
+  // frames, snapshots, progress and columns advance what the job has logged. The events get
+  // their seq and time (set again by a retry when the transaction failed).
+  long append(const std::string& job_id, std::vector<v1::JobEvent>& events);
   // Events with seq >= from_seq, in order: at most max_count, and stopping once max_bytes is
   // exceeded (at least one event is returned when any exists).
   std::vector<v1::JobEvent> events(const std::string& job_id, long from_seq, int max_count,

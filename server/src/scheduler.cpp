@@ -211,10 +211,9 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
     obs.cancelled = [&] { return ctl.stop.load() != kRun; };
     obs.checkpoint = [&](long step) {
       if (seconds_since(last_ckpt) < config_.checkpoint_every_s) return;
-      try {
-        save(step);
-      } catch (const CheckpointFileError& e) {
-        // The job goes on; a restart would resume from the previous checkpoint.
+      // A checkpoint that cannot be written, or whose log cannot be (a full disk): the job goes
+      // on; a restart would resume from the previous checkpoint.
+      auto skip = [&](const std::exception& e) {
         v1::JobEvent l;
         l.mutable_log()->set_level("warning");
         l.mutable_log()->set_text(std::string(e.what()) +
@@ -223,6 +222,13 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
         ch->push(std::move(l));
         spdlog::warn("event=checkpoint_failed job={} error=\"{}\"", row.id, e.what());
         last_ckpt = Clock::now();
+      };
+      try {
+        save(step);
+      } catch (const CheckpointFileError& e) {
+        skip(e);
+      } catch (const SqliteError& e) {
+        skip(e);
       }
     };
     const JobOutcome r = runner->run(obs, [&](Job& j) {
@@ -266,7 +272,10 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
     const JobState s = state;
     if (job) ch->push(report_event(job_report(*job, row.id, s, reason, wall).dump()));
     ch->push(state_event(s, reason));
-    ch->flush();
+    // Through a full disk: the end is logged once it takes writes (a drain gives up; the job,
+    // still RUNNING in the database, is requeued at the next start).
+    if (!ch->flush_retrying([&] { return ctl.stop.load() == kDrain; }))
+      throw SqliteError("the daemon stopped before the disk took the job's last events");
     std::error_code ec;
     std::filesystem::remove(ckpt, ec);
     spdlog::info("event=job_end job={} state={} wall_s={:.3f} reason=\"{}\"", row.id,
