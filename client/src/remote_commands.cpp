@@ -13,6 +13,7 @@
 #include "console.h"
 #include "flags.h"
 #include "mdem/cli.h"
+#include "mdem/job_state.h"
 #include "mdem/snapshot_proto.h"
 #include "mdem/spec.h"
 #include "mdem/spec_job.h"
@@ -154,14 +155,6 @@ std::string db_path(const std::map<std::string, std::string>& given) {
   return it != given.end() ? it->second : ResultsStore::default_path();
 }
 
-bool is_final(const std::string& state) {
-  return state == "SUCCEEDED" || state == "FAILED" || state == "CANCELLED";
-}
-
-std::string state_name(v1::JobState s) {
-  return s == v1::JOB_STATE_UNSPECIFIED ? "QUEUED" : v1::JobState_Name(s);
-}
-
 double reconnect_timeout(const std::map<std::string, std::string>& given) {
   const auto it = given.find("--reconnect-timeout");
   if (it == given.end()) return kDefaultReconnectTimeoutS;
@@ -171,7 +164,7 @@ double reconnect_timeout(const std::map<std::string, std::string>& given) {
 // The local record of a daemon's job, from what the daemon says of it. The state starts at
 // QUEUED unless given: the events bring it up to date as they are stored.
 JobRecord record_of(const v1::JobInfo& info, const std::string& server,
-                    const std::string& state = "QUEUED") {
+                    const std::string& state = job_state_name(v1::QUEUED)) {
   JobRecord r;
   r.id = info.job_id();
   r.kind = info.kind().empty() ? std::string(job_kind_name(info.spec())) : info.kind();
@@ -188,7 +181,7 @@ json info_json(const v1::JobInfo& info) {
       {"user", info.user()},
       {"kind", info.kind()},
       {"name", info.name()},
-      {"state", state_name(info.state())},
+      {"state", job_state_name(info.state())},
       {"reason", info.reason()},
       {"created_at", info.created_at()},
       {"started_at", info.started_at()},
@@ -225,7 +218,7 @@ int print_finished(const ResultsStore& store, const JobRecord& rec, bool as_json
   } else {
     print_report(out, err, doc, std::nullopt);
   }
-  return rec.state == "SUCCEEDED" ? kOk : kJobFailed;
+  return parse_job_state(rec.state) == v1::SUCCEEDED ? kOk : kJobFailed;
 }
 
 // Follows one job's event stream into the local database. Events are applied in batches, each
@@ -357,7 +350,7 @@ class Watcher {
     if (!is_final(rec->state) || rec->summary_json.empty()) {
       // A job cancelled while queued has no report; a daemon may end a stream early. Ask it.
       const v1::JobInfo info = client_.get(id_);
-      const std::string state = state_name(info.state());
+      const std::string state = job_state_name(info.state());
       if (is_final(state)) {
         RemoteUpdate u;
         u.last_seq = committed_;
@@ -391,7 +384,7 @@ class Watcher {
     if (snapshot_ && ev.event_case() != v1::JobEvent::kSnapshot) drop_snapshot("interrupted");
     switch (ev.event_case()) {
       case v1::JobEvent::kState: {
-        const std::string state = state_name(ev.state().state());
+        const std::string state = job_state_name(ev.state().state());
         batch_.state = state;
         batch_.reason = ev.state().reason();
         if (is_final(state)) batch_.finished_at = ev.time();
@@ -619,7 +612,7 @@ int run_submit(const std::vector<std::string>& args, std::ostream& out, std::ost
                       e.code, e.exit_code);
   }
   const v1::JobInfo& info = response.job();
-  JobRecord rec = record_of(info, settings.server, state_name(info.state()));
+  JobRecord rec = record_of(info, settings.server, job_state_name(info.state()));
   if (!info.has_spec()) rec.spec_json = spec::to_json(spec, false);
   if (rec.kind.empty()) rec.kind = kind->name;
   store.upsert_remote_job(rec);
@@ -628,7 +621,7 @@ int run_submit(const std::vector<std::string>& args, std::ostream& out, std::ost
     write_json(out, json{{"job_id", info.job_id()},
                          {"request_id", request_id},
                          {"created", response.created()},
-                         {"state", state_name(info.state())},
+                         {"state", job_state_name(info.state())},
                          {"server", settings.server},
                          {"db", store.path()}});
     out << "\n";
@@ -637,7 +630,7 @@ int run_submit(const std::vector<std::string>& args, std::ostream& out, std::ost
   if (!as_json) {
     out << info.job_id() << "\n" << std::flush;
     err << (response.created() ? "queued " : "already submitted with this request id: ")
-        << info.job_id() << " (" << state_name(info.state()) << ")";
+        << info.job_id() << " (" << job_state_name(info.state()) << ")";
     if (!follow) err << "; follow it with `mdem watch " << info.job_id() << "`";
     err << "\n";
   }
@@ -700,7 +693,7 @@ int run_cancel(const std::vector<std::string>& args, std::ostream& out, std::ost
       resolve_connection(given, process_env(), rec ? rec->server : "");
   JobClient client(settings);
   const v1::JobInfo info = client.cancel(rec ? rec->id : given_id);
-  const std::string state = state_name(info.state());
+  const std::string state = job_state_name(info.state());
   if (rec && !is_final(rec->state) && is_final(state))
     store->set_state(rec->id, state, info.reason());
   if (given.count("--json")) {
@@ -708,7 +701,7 @@ int run_cancel(const std::vector<std::string>& args, std::ostream& out, std::ost
     out << "\n";
     return kOk;
   }
-  if (state == "CANCELLED")
+  if (parse_job_state(state) == v1::CANCELLED)
     out << "cancelled " << info.job_id() << "; what it produced is kept (`mdem watch "
         << info.job_id() << "` fetches it)\n";
   else if (is_final(state))
@@ -757,8 +750,9 @@ int remote_ls(const std::map<std::string, std::string>& given, std::ostream& out
   for (const v1::JobInfo& info : response.jobs()) {
     rows.push_back({info.job_id()});
     if (all) rows.back().push_back(info.user());
-    rows.back().insert(rows.back().end(), {info.kind(), state_name(info.state()), info.created_at(),
-                                           progress_text(info), note_text(info)});
+    rows.back().insert(rows.back().end(),
+                       {info.kind(), job_state_name(info.state()), info.created_at(),
+                        progress_text(info), note_text(info)});
   }
   print_table(out, rows);
   return kOk;
@@ -779,7 +773,7 @@ int remote_show(const std::string& id, const std::map<std::string, std::string>&
                                                 {"server:", client.settings().server},
                                                 {"user:", info.user()},
                                                 {"kind:", info.kind()},
-                                                {"state:", state_name(info.state())}};
+                                                {"state:", job_state_name(info.state())}};
   if (!info.name().empty()) rows.push_back({"name:", info.name()});
   if (!info.reason().empty()) rows.push_back({"reason:", info.reason()});
   rows.push_back({"created:", info.created_at()});

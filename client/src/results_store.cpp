@@ -18,6 +18,8 @@
 #include <set>
 #include <utility>
 
+#include "mdem/job_id.h"
+#include "mdem/job_state.h"
 #include "mdem/sqlite_db.h"
 
 namespace mdem::cli {
@@ -77,8 +79,6 @@ CREATE TABLE snapshots (
 // w,x,y,z; radius float64; kind, tube, idx int32; scalar_names a JSON array; scalars float64,
 // n values per name in the order of the names.
 
-const std::set<std::string> kStates = {"QUEUED", "RUNNING", "SUCCEEDED", "FAILED", "CANCELLED"};
-
 constexpr const char* kJobColumns =
     "id, kind, spec_json, state, reason, summary_json, created_at, finished_at, server, last_seq";
 // The same for a read-only file of the first schema, which lacks server and last_seq.
@@ -93,9 +93,6 @@ constexpr std::pair<const char*, const char*> kMigrations[] = {
     {"last_seq", "last_seq INTEGER NOT NULL DEFAULT 0"},
 };
 
-bool is_final(const std::string& state) {
-  return state == "SUCCEEDED" || state == "FAILED" || state == "CANCELLED";
-}
 constexpr const char* kSnapshotColumns =
     "step, time_ps, n, x, q, radius, kind, tube, idx, scalar_names, scalars";
 
@@ -415,9 +412,9 @@ void bind_snapshot(Query& q, const Snapshot& s) {
 }
 
 void check_state(const Impl& db, const std::string& id, const std::string& state) {
-  if (!kStates.count(state))
+  if (!parse_job_state(state))
     throw StoreError(db.where() + ": job '" + id + "': unknown state '" + state +
-                     "' (allowed: QUEUED, RUNNING, SUCCEEDED, FAILED, CANCELLED)");
+                     "' (allowed: " + job_state_names() + ")");
 }
 
 // The writes below run inside the caller's transaction.
@@ -529,15 +526,7 @@ std::string ResultsStore::default_path() {
 
 const std::string& ResultsStore::path() const { return impl_->path(); }
 
-std::string ResultsStore::new_job_id() {
-  static std::mutex mu;
-  static std::random_device device;
-  static std::mt19937 gen(device());
-  std::lock_guard lock(mu);
-  char hex[8];
-  std::snprintf(hex, sizeof hex, "%04x", static_cast<unsigned>(gen() & 0xffffu));
-  return "j-" + utc_now("%Y%m%d-%H%M%S") + "-" + hex;
-}
+std::string ResultsStore::new_job_id() { return mdem::new_job_id(4); }
 
 void ResultsStore::create_job(const JobRecord& job) {
   if (job.id.empty()) throw StoreError(impl_->where() + ": a job needs an id");
@@ -557,7 +546,7 @@ void ResultsStore::create_job(const JobRecord& job) {
 
 void ResultsStore::finish_job(const std::string& id, const std::string& state,
                               const std::string& reason, const std::string& summary_json) {
-  if (!kStates.count(state))
+  if (!parse_job_state(state))
     throw StoreError(impl_->where() + ": job '" + id + "': unknown state '" + state + "'");
   impl_->call([&](StoreDb& db) {
     Query q(db,

@@ -12,6 +12,7 @@
 #include "mdem/cli.h"
 #include "mdem/core/units.h"
 #include "mdem/job/bundle_job.h"
+#include "mdem/job_state.h"
 #include "mdem/spec_job.h"
 
 namespace mdem::cli {
@@ -131,7 +132,9 @@ int run_bundle(const RunOptions& o, std::ostream& out, std::ostream& err) {
 
   json doc;
   doc["job"] = "bundle";
-  doc["state"] = failure.empty() ? "SUCCEEDED" : cancelled ? "CANCELLED" : "FAILED";
+  doc["state"] = job_state_name(failure.empty() ? v1::SUCCEEDED
+                                : cancelled     ? v1::CANCELLED
+                                                : v1::FAILED);
   if (!failure.empty()) doc["reason"] = failure;
   json summary;
   summary["tubes"] = o.bundle.tubes;

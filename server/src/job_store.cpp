@@ -5,6 +5,8 @@
 #include <ctime>
 #include <random>
 
+#include "mdem/job_id.h"
+
 namespace mdem::server {
 namespace {
 
@@ -81,20 +83,6 @@ JobRow read_row(const Query& q) {
   r.columns_logged = q.integer(22) != 0;
   r.report_json = q.text(23);
   return r;
-}
-
-std::string new_job_id() {
-  static std::mt19937_64 rng{std::random_device{}()};
-  static std::mutex mu;
-  const std::time_t t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[64];
-  std::strftime(buf, sizeof buf, "j-%Y%m%d-%H%M%S-", &tm);
-  std::lock_guard lock(mu);
-  char tail[16];
-  std::snprintf(tail, sizeof tail, "%06llx", static_cast<unsigned long long>(rng() & 0xffffff));
-  return std::string(buf) + tail;
 }
 
 v1::JobEvent state_event(v1::JobState s, const std::string& reason) {
@@ -196,7 +184,7 @@ SubmitResult JobStore::submit(const std::string& user, const std::string& reques
   }
   std::string spec_bytes;
   spec.SerializeToString(&spec_bytes);
-  const std::string id = new_job_id();
+  const std::string id = new_job_id(6);  // a shared queue: many submits a second
   Query(db_,
         "INSERT INTO jobs (id, user, request_id, kind, name, spec, state, created_at, elements, "
         "total_steps, threads) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
