@@ -19,6 +19,7 @@
 #include "../client/src/spec_flags.h"
 #include "mdem/core/units.h"
 #include "mdem/job/twist_job.h"
+#include "mdem/job_id.h"
 #include "mdem/job_kinds.h"
 #include "mdem/job_runner.h"
 #include "mdem/job_state.h"
@@ -304,6 +305,17 @@ TEST(FlagHelp, RangesInTheHelpAreTheRangesValidationEnforces) {
     // Every numeric flag with a fixed range states it: run 5, twist 10, compression 10.
     EXPECT_GE(checked, kind.name == "twist" ? 15 : 14);
   }
+}
+
+// One id generator serves mdem run (4 random hex digits) and mdemd (6).
+TEST(JobId, TimeThenRandomHex) {
+  EXPECT_TRUE(std::regex_match(mdem::new_job_id(), std::regex(R"(j-\d{8}-\d{6}-[0-9a-f]{4})")));
+  EXPECT_TRUE(std::regex_match(mdem::new_job_id(6), std::regex(R"(j-\d{8}-\d{6}-[0-9a-f]{6})")));
+  std::set<std::string> ids;
+  for (int i = 0; i < 200; ++i) ids.insert(mdem::new_job_id(16));
+  EXPECT_EQ(ids.size(), 200u);
+  EXPECT_THROW(mdem::new_job_id(0), std::invalid_argument);
+  EXPECT_THROW(mdem::new_job_id(17), std::invalid_argument);
 }
 
 }  // namespace
