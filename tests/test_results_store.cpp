@@ -2,6 +2,8 @@
 // non-finite values, and clear errors for unwritable, corrupt, foreign or newer database files.
 #include <gtest/gtest.h>
 #include <sqlite3.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <bit>
 #include <cmath>
@@ -317,6 +319,59 @@ TEST(ResultsStore, ForeignAndNewerDatabasesAreRefused) {
   msg = error_of([&] { ResultsStore store(newer); });
   EXPECT_NE(msg.find("newer"), std::string::npos) << msg;
   EXPECT_NE(msg.find(newer), std::string::npos) << msg;
+}
+
+// A job run in-process records its process; once that process is gone without finishing the
+// job (here: a child that creates it and exits), every reader sees INTERRUPTED, while a job of a
+// live process, a finished job and a daemon's job read as stored.
+TEST(ResultsStore, ARunningJobWhoseProcessIsGoneReadsInterrupted) {
+  TempDir tmp;
+  const std::string path = tmp.file("r.db");
+  ResultsStore store(path);
+  store.create_job(make_job("j-alive"));  // this process: alive
+  JobRecord remote = make_job("j-remote");
+  remote.server = "127.0.0.1:1";
+  store.upsert_remote_job(remote);
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    int code = 0;
+    try {
+      ResultsStore s(path);
+      s.create_job(make_job("j-dead"));
+      s.create_job(make_job("j-done"));
+      s.finish_job("j-done", "SUCCEEDED", "", "{}");
+    } catch (...) {
+      code = 1;
+    }
+    _exit(code);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+
+  const auto dead = store.find("j-dead");
+  ASSERT_TRUE(dead.has_value());
+  EXPECT_EQ(dead->state, "INTERRUPTED");
+  EXPECT_NE(dead->reason.find("pid " + std::to_string(child)), std::string::npos) << dead->reason;
+  EXPECT_EQ(store.find("j-alive")->state, "RUNNING");
+  EXPECT_EQ(store.find("j-done")->state, "SUCCEEDED");
+  EXPECT_EQ(store.find("j-remote")->state, "RUNNING");
+  for (const JobRecord& j : store.list())
+    EXPECT_EQ(j.state, j.id == "j-dead"   ? "INTERRUPTED"
+                       : j.id == "j-done" ? "SUCCEEDED"
+                                          : "RUNNING")
+        << j.id;
+  // It is how the job reads, not what is stored (a read-only file reads the same): the row
+  // still says RUNNING.
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  sqlite3_stmt* q = nullptr;
+  sqlite3_prepare_v2(db, "SELECT state FROM jobs WHERE id = 'j-dead'", -1, &q, nullptr);
+  ASSERT_EQ(sqlite3_step(q), SQLITE_ROW);
+  EXPECT_STREQ(reinterpret_cast<const char*>(sqlite3_column_text(q, 0)), "RUNNING");
+  sqlite3_finalize(q);
+  sqlite3_close(db);
 }
 
 TEST(ResultsStore, ReopeningSeesEarlierDataAndTwoConnectionsShareTheFile) {

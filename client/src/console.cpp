@@ -5,6 +5,7 @@
 #include <csignal>
 #include <iomanip>
 #include <iostream>
+#include <iterator>
 #include <sstream>
 
 #include "mdem/job_kinds.h"
@@ -13,8 +14,13 @@
 namespace mdem::cli {
 namespace {
 
-std::atomic<bool> g_interrupted{false};
-extern "C" void on_sigint(int) { g_interrupted = true; }
+constexpr int kCaught[] = {SIGINT, SIGTERM, SIGHUP};
+std::atomic<int> g_signal{0};  // the first signal caught; 0: none
+static_assert(std::atomic<int>::is_always_lock_free);
+extern "C" void on_interrupt(int sig) {
+  int none = 0;
+  g_signal.compare_exchange_strong(none, sig);
+}
 
 constexpr int kBarWidth = 30;
 
@@ -68,13 +74,33 @@ double ProgressReporter::seconds() const {
 bool is_terminal(const std::ostream& err) { return &err == &std::cerr && isatty(STDERR_FILENO); }
 
 InterruptGuard::InterruptGuard() {
-  g_interrupted = false;
-  previous_ = std::signal(SIGINT, on_sigint);
+  static_assert(std::size(kCaught) == kSignals);
+  g_signal = 0;
+  for (int k = 0; k < kSignals; ++k) {
+    previous_[k] = std::signal(kCaught[k], on_interrupt);
+    // Under nohup SIGHUP is ignored on purpose: it stays so.
+    if (kCaught[k] == SIGHUP && previous_[k] == SIG_IGN) std::signal(SIGHUP, SIG_IGN);
+  }
 }
 
-InterruptGuard::~InterruptGuard() { std::signal(SIGINT, previous_); }
+InterruptGuard::~InterruptGuard() {
+  for (int k = 0; k < kSignals; ++k) std::signal(kCaught[k], previous_[k]);
+}
 
-bool InterruptGuard::interrupted() { return g_interrupted.load(); }
+bool InterruptGuard::interrupted() { return g_signal.load() != 0; }
+
+const char* InterruptGuard::signal_name() {
+  switch (g_signal.load()) {
+    case SIGINT:
+      return "SIGINT";
+    case SIGTERM:
+      return "SIGTERM";
+    case SIGHUP:
+      return "SIGHUP";
+    default:
+      return "";
+  }
+}
 
 namespace {
 

@@ -39,8 +39,11 @@ class ProgressReporter {
 // True when `err` is std::cerr and that is a terminal (the bar), false when piped (plain lines).
 bool is_terminal(const std::ostream& err);
 
-// Catches Ctrl-C (SIGINT) while alive, restoring the previous handler after; interrupted() tells
-// whether it was pressed since the guard was made.
+// Catches Ctrl-C (SIGINT), SIGTERM and SIGHUP while alive, restoring the previous handlers
+// after: the handler only sets the flag that interrupted() reads, the same flag a job's run loop
+// polls (JobObserver::cancelled), so each of them stops a job at its next poll and the job ends
+// CANCELLED with what it computed kept. signal_name(): "SIGINT", "SIGTERM", "SIGHUP" (the first
+// caught since the guard was made), "" when none. A SIGHUP ignored before (nohup) stays ignored.
 class InterruptGuard {
  public:
   InterruptGuard();
@@ -48,9 +51,11 @@ class InterruptGuard {
   InterruptGuard(const InterruptGuard&) = delete;
   InterruptGuard& operator=(const InterruptGuard&) = delete;
   static bool interrupted();
+  static const char* signal_name();
 
  private:
-  void (*previous_)(int);
+  static constexpr int kSignals = 3;
+  void (*previous_[kSignals])(int);
 };
 
 // A job's final report (the document `mdem run <kind> --json` prints: job_id, kind, state,

@@ -383,8 +383,12 @@ JobClient::JobClient(ConnectionSettings settings) : settings_(std::move(settings
   args.SetInt(GRPC_ARG_HTTP2_MAX_PINGS_WITHOUT_DATA, 0);  // keep pinging a quiet watch
   // Reconnect within the watch's own backoff (0.2 s .. 5 s), not gRPC's default of up to 2 min.
   args.SetInt(GRPC_ARG_INITIAL_RECONNECT_BACKOFF_MS, 200);
-  args.SetInt(GRPC_ARG_MIN_RECONNECT_BACKOFF_MS, 200);
   args.SetInt(GRPC_ARG_MAX_RECONNECT_BACKOFF_MS, 5000);
+  // Despite its name, gRPC takes this as the least time a connection attempt may take before it
+  // is abandoned (TCP connect plus the daemon's HTTP/2 SETTINGS). At 200 ms a daemon that is
+  // busy or paused for a moment failed every call at once; at 20 s (gRPC's default) the call's
+  // own deadline decides. A refused connection (no daemon listening) still fails at once.
+  args.SetInt(GRPC_ARG_MIN_RECONNECT_BACKOFF_MS, kConnectAttemptTimeoutMs);
   args.SetMaxReceiveMessageSize(64 << 20);
   channel_ = grpc::CreateCustomChannel(settings_.server, creds, args);
   stub_ = v1::JobService::NewStub(channel_);
@@ -394,6 +398,10 @@ std::unique_ptr<grpc::ClientContext> JobClient::stream_context() const {
   auto ctx = std::make_unique<grpc::ClientContext>();
   if (!settings_.token.empty()) ctx->AddMetadata("authorization", "Bearer " + settings_.token);
   return ctx;
+}
+
+bool JobClient::wait_connected(std::chrono::system_clock::time_point deadline) {
+  return channel_->WaitForConnected(deadline);
 }
 
 std::unique_ptr<grpc::ClientContext> JobClient::call_context() const {

@@ -4,6 +4,7 @@
 // gRPC statuses turned into messages that say what to do and into exit codes.
 #include <grpcpp/grpcpp.h>
 
+#include <chrono>
 #include <functional>
 #include <map>
 #include <memory>
@@ -94,6 +95,9 @@ std::string describe_status(const grpc::Status& status, const ConnectionSettings
 const char* status_code_name(grpc::StatusCode code);
 
 inline constexpr int kCallDeadlineMs = 10000;  // every unary call
+// How long one connection attempt may wait for the daemon's handshake: longer than a call's
+// deadline, so that a daemon answering within the deadline is always reached.
+inline constexpr int kConnectAttemptTimeoutMs = 20000;
 
 // The JobService of one daemon. Unary calls carry the token and a 10 s deadline and throw
 // RemoteError; a WatchJob stream carries the token and no deadline.
@@ -108,6 +112,9 @@ class JobClient {
   v1::JobInfo cancel(const std::string& job_id);
 
   std::unique_ptr<grpc::ClientContext> stream_context() const;
+  // Waits until the channel is connected (starting a connection attempt) or `deadline`; true
+  // when connected.
+  bool wait_connected(std::chrono::system_clock::time_point deadline);
   v1::JobService::Stub& stub() { return *stub_; }
 
  private:

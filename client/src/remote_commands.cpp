@@ -92,8 +92,10 @@ void print_watch_help(std::ostream& os) {
         "\n"
         "Flags:\n"
         "  --json               print the final report as one JSON object (as `mdem run --json`)\n"
-        "  --reconnect-timeout S  when the connection is lost, retry (every 0.2 s, doubling to\n"
-        "                       5 s) for S seconds, 0..86400 (default 60)\n"
+        "  --reconnect-timeout S  when the daemon cannot be reached or the connection is lost\n"
+        "                       (before or after the first event), retry (every 0.2 s, doubling\n"
+        "                       to 5 s) for S seconds, 0..86400 (default 60). A job not yet\n"
+        "                       recorded in the database is first looked up once, without retry.\n"
      << kDbHelp << "  -h, --help           show this help\n"
      << kConnectionHelp
      << "\n"
@@ -314,7 +316,7 @@ class Watcher {
       } else {
         const bool retryable = status.error_code() == grpc::StatusCode::UNAVAILABLE ||
                                status.error_code() == grpc::StatusCode::CANCELLED;
-        if (!retryable || !(ever_connected || got_events)) {
+        if (!retryable) {
           progress_.finish();
           throw RemoteError(describe_status(status, client_.settings()), status.error_code(),
                             exit_code_for(status.error_code()));
@@ -324,20 +326,27 @@ class Watcher {
         lost = true;
         lost_since = Clock::now();
         if (!status.ok())
-          progress_.note("lost the connection to mdemd at " + server + " (" +
-                         status.error_message() + "); reconnecting for up to " +
+          progress_.note((ever_connected ? "lost the connection to mdemd at " + server
+                                         : "cannot reach mdemd at " + server + " yet") +
+                         " (" + status.error_message() + "); " +
+                         (ever_connected ? "reconnecting" : "retrying") + " for up to " +
                          seconds_text(reconnect_timeout_s_) + "...");
       }
       const double lost_s = std::chrono::duration<double>(Clock::now() - lost_since).count();
       if (lost_s >= reconnect_timeout_s_) {
         progress_.finish();
-        err_ << "mdem watch: gave up after " << seconds_text(lost_s) << " without mdemd at "
-             << server << (status.ok() ? "" : " (" + status.error_message() + ")")
-             << "; everything received is stored, and the job goes on there: `mdem watch " << id_
-             << "` resumes\n";
+        if (!ever_connected && !status.ok())
+          err_ << "mdem watch: " << describe_status(status, client_.settings())
+               << "\nmdem watch: gave up after " << seconds_text(lost_s)
+               << " (--reconnect-timeout); `mdem watch " << id_ << "` tries again\n";
+        else
+          err_ << "mdem watch: gave up after " << seconds_text(lost_s) << " without mdemd at "
+               << server << (status.ok() ? "" : " (" + status.error_message() + ")")
+               << "; everything received is stored, and the job goes on there: `mdem watch " << id_
+               << "` resumes\n";
         return kConnection;
       }
-      sleep_unless_interrupted(std::min(backoff_s, reconnect_timeout_s_ - lost_s));
+      wait_to_reconnect(std::min(backoff_s, reconnect_timeout_s_ - lost_s));
       backoff_s = std::min(backoff_s * 2, 5.0);
     }
   }
@@ -533,10 +542,19 @@ class Watcher {
     ctx_ = ctx;
   }
 
-  void sleep_unless_interrupted(double s) {
-    const auto until = Clock::now() + std::chrono::duration<double>(std::max(0.0, s));
-    while (Clock::now() < until && !InterruptGuard::interrupted())
+  // Waits up to s seconds before the next attempt, ending early (after at least 0.2 s) once the
+  // channel connects, so a daemon that comes back is followed at once, not at the end of a
+  // backoff; Ctrl-C ends the wait.
+  void wait_to_reconnect(double s) {
+    const auto start = Clock::now();
+    const auto until = start + std::chrono::duration<double>(std::max(0.0, s));
+    const auto least = start + std::chrono::milliseconds(200);
+    while (Clock::now() < until && !InterruptGuard::interrupted()) {
+      if (Clock::now() >= least &&
+          client_.wait_connected(std::chrono::system_clock::now() + std::chrono::milliseconds(50)))
+        return;
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
   }
 
   static std::string seconds_text(double s) {

@@ -4,6 +4,8 @@
 // little-endian float64 / int32 values, so doubles come back bit for bit.
 #include "results_store.h"
 
+#include <unistd.h>
+
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -12,10 +14,12 @@
 #include <cstdlib>
 #include <ctime>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <set>
+#include <sstream>
 #include <utility>
 
 #include "mdem/job_id.h"
@@ -45,7 +49,8 @@ CREATE TABLE jobs (
   finished_at TEXT NOT NULL DEFAULT '',
   columns_json TEXT NOT NULL DEFAULT '[]',
   server TEXT NOT NULL DEFAULT '',
-  last_seq INTEGER NOT NULL DEFAULT 0
+  last_seq INTEGER NOT NULL DEFAULT 0,
+  runner TEXT NOT NULL DEFAULT ''
 );
 CREATE TABLE frames (
   job_id TEXT NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,
@@ -72,25 +77,30 @@ CREATE TABLE snapshots (
   UNIQUE (job_id, seq)
 );
 )sql";
-// jobs.server and jobs.last_seq (a daemon's job: where it runs, the last event applied) came
-// after version 1 was released: an older file gets them by ALTER TABLE when opened (kMigrations),
-// so the version stays 1 and an older mdem still reads the file.
+// jobs.server and jobs.last_seq (a daemon's job: where it runs, the last event applied) and
+// jobs.runner (a job run in-process: the process running it, see this_process()) came after
+// version 1 was released: an older file gets them by ALTER TABLE when opened (kMigrations), so
+// the version stays 1 and an older mdem still reads the file.
 // frames.vals: float64 per column. snapshots: x = float64 x,y,z per element; q = float64
 // w,x,y,z; radius float64; kind, tube, idx int32; scalar_names a JSON array; scalars float64,
 // n values per name in the order of the names.
 
-constexpr const char* kJobColumns =
-    "id, kind, spec_json, state, reason, summary_json, created_at, finished_at, server, last_seq";
-// The same for a read-only file of the first schema, which lacks server and last_seq.
-constexpr const char* kOldJobColumns =
-    "id, kind, spec_json, state, reason, summary_json, created_at, finished_at, '', 0";
-constexpr const char* kInsertJobColumns =
+// The columns of the first schema; the columns of kMigrations follow them in a JobRecord.
+constexpr const char* kFirstJobColumns =
     "id, kind, spec_json, state, reason, summary_json, created_at, finished_at";
+constexpr const char* kRemoteJobColumns =
+    "id, kind, spec_json, state, reason, summary_json, created_at, finished_at, server, last_seq";
 
-// Columns added to the jobs table since the first schema: name and definition.
-constexpr std::pair<const char*, const char*> kMigrations[] = {
-    {"server", "server TEXT NOT NULL DEFAULT ''"},
-    {"last_seq", "last_seq INTEGER NOT NULL DEFAULT 0"},
+struct Migration {
+  const char* column;
+  const char* definition;
+  const char* fallback;  // read in its place from a read-only file that lacks it
+};
+// Columns added to the jobs table since the first schema, in JobRecord's order.
+constexpr Migration kMigrations[] = {
+    {"server", "server TEXT NOT NULL DEFAULT ''", "''"},
+    {"last_seq", "last_seq INTEGER NOT NULL DEFAULT 0", "0"},
+    {"runner", "runner TEXT NOT NULL DEFAULT ''", "''"},
 };
 
 constexpr const char* kSnapshotColumns =
@@ -148,23 +158,93 @@ std::string env(const char* name) {
   return v ? v : "";
 }
 
+// ---- the process running a job ---------------------------------------------------------------
+
+std::string first_line(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  return line;
+}
+
+// Field 22 of /proc/PID/stat: the process's start time in clock ticks since boot ("" when there
+// is no such process). With the boot id it names one process for good, unlike the pid alone.
+std::string start_time(long pid) {
+  const std::string stat = first_line("/proc/" + std::to_string(pid) + "/stat");
+  const std::size_t paren = stat.rfind(')');
+  if (paren == std::string::npos) return "";
+  std::istringstream rest(stat.substr(paren + 2));  // field 3 onwards
+  std::string f;
+  for (int k = 3; k <= 22 && rest >> f; ++k)
+    if (k == 22) return f;
+  return "";
+}
+
+std::string host_name() {
+  char buf[256] = {};
+  if (gethostname(buf, sizeof buf - 1) != 0) return "";
+  return buf;
+}
+
+constexpr const char* kBootId = "/proc/sys/kernel/random/boot_id";
+
+// "HOST BOOT-ID PID START-TIME" of this process; "" where /proc cannot tell.
+std::string this_process() {
+  const std::string host = host_name(), boot = first_line(kBootId);
+  const std::string start = start_time(static_cast<long>(getpid()));
+  if (host.empty() || host.find(' ') != std::string::npos || boot.empty() || start.empty())
+    return "";
+  return host + " " + boot + " " + std::to_string(getpid()) + " " + start;
+}
+
+// True when `runner` (this_process() of another process) names a process of this host that is
+// gone: another boot, or no process of that pid and start time. A runner of another host, or
+// one that cannot be read, is taken to be alive.
+bool runner_gone(const std::string& runner) {
+  std::istringstream in(runner);
+  std::string host, boot, start;
+  long pid = 0;
+  if (!(in >> host >> boot >> pid >> start) || host != host_name()) return false;
+  const std::string my_boot = first_line(kBootId);
+  if (my_boot.empty()) return false;
+  return boot != my_boot || start_time(pid) != start;
+}
+
+// "pid 123 on host" of a runner, for messages.
+std::string runner_text(const std::string& runner) {
+  std::istringstream in(runner);
+  std::string host, boot, pid;
+  in >> host >> boot >> pid;
+  return "pid " + pid + " on " + host;
+}
+
 // ---- the connection ---------------------------------------------------------------------------
 
 // The connection (mdem_sqlite: statement cache, queries, transactions) and what this store knows
 // of the file's schema. ResultsStore::Impl is this, named outside the class so that the helpers
 // below can take it. The layer's SqliteError becomes StoreError at the public interface (call).
 struct StoreDb : SqliteDb {
-  bool remote_columns = true;  // jobs has server and last_seq (false: an old read-only file)
+  std::set<std::string> missing;  // columns of kMigrations an old read-only file lacks
+  bool remote_columns = true;     // jobs has server and last_seq (false: an old read-only file)
 
   explicit StoreDb(std::string path)
-      : SqliteDb(std::move(path), "results database", "NORMAL", kBusyTimeoutMs) {}
-  std::string job_columns() const { return remote_columns ? kJobColumns : kOldJobColumns; }
+      : SqliteDb(std::move(path), "results database", "NORMAL", kBusyTimeoutMs, refuse_foreign) {}
+  // The columns of a JobRecord, in its order (a fallback value for a missing one).
+  std::string job_columns() const {
+    std::string cols = kFirstJobColumns;
+    for (const Migration& m : kMigrations)
+      cols += std::string(", ") + (missing.count(m.column) ? m.fallback : m.column);
+    return cols;
+  }
   void require_remote_columns() const {
     if (!remote_columns)
       throw StoreError(where() +
                        ": read-only and of an older schema (no server/last_seq columns); open it "
                        "writable once to upgrade it");
   }
+  // A database with tables but none of ours is someone else's: refused before anything (even
+  // the switch to WAL) changes it.
+  static void refuse_foreign(SqliteDb& db);
 };
 
 using Impl = StoreDb;
@@ -179,10 +259,18 @@ decltype(auto) store_errors(F&& f) {
   }
 }
 
-long table_count(Impl& db) {
+long table_count(SqliteDb& db) {
   Query q(db, "SELECT COUNT(*) FROM sqlite_master WHERE type = 'table'", "cannot read");
   q.step();
   return q.integer(0);
+}
+
+void StoreDb::refuse_foreign(SqliteDb& db) {
+  if (!db.has_table("schema_version") && table_count(db) > 0)
+    throw SqliteError(db.where() +
+                      ": not an mdem results database (it has other tables and no "
+                      "schema_version); it is left unchanged. Give --db (or $MDEM_DB) a new file "
+                      "or an mdem results database");
 }
 
 void check_schema_version(Impl& db) {
@@ -195,8 +283,8 @@ void check_schema_version(Impl& db) {
 }
 
 bool needs_migration(Impl& db) {
-  for (const auto& [column, definition] : kMigrations)
-    if (!db.has_column("jobs", column)) return true;
+  for (const Migration& m : kMigrations)
+    if (!db.has_column("jobs", m.column)) return true;
   return false;
 }
 
@@ -206,14 +294,16 @@ bool needs_migration(Impl& db) {
 void migrate(Impl& db) {
   if (!needs_migration(db)) return;
   if (sqlite3_db_readonly(db.handle(), "main") == 1) {
-    db.remote_columns = false;
+    for (const Migration& m : kMigrations)
+      if (!db.has_column("jobs", m.column)) db.missing.insert(m.column);
+    db.remote_columns = !db.missing.count("server") && !db.missing.count("last_seq");
     return;
   }
   Transaction t(db);
-  for (const auto& [column, definition] : kMigrations)
-    if (!db.has_column("jobs", column))  // another process may have added it meanwhile
-      db.exec((std::string("ALTER TABLE jobs ADD COLUMN ") + definition).c_str(),
-              std::string("cannot add the column '") + column + "' to the jobs table");
+  for (const Migration& m : kMigrations)
+    if (!db.has_column("jobs", m.column))  // another process may have added it meanwhile
+      db.exec((std::string("ALTER TABLE jobs ADD COLUMN ") + m.definition).c_str(),
+              std::string("cannot add the column '") + m.column + "' to the jobs table");
   t.commit();
 }
 
@@ -230,8 +320,7 @@ void ensure_schema(Impl& db) {
     t.commit();
     return migrate(db);
   }
-  if (table_count(db) > 0)
-    throw StoreError(db.where() + ": not an mdem results database (it has other tables)");
+  StoreDb::refuse_foreign(db);
   db.exec(kSchema, "cannot create the schema");
   Query(db, "INSERT INTO schema_version (version) VALUES (?)", "cannot create the schema")
       .bind(1, static_cast<long>(kSchemaVersion))
@@ -298,8 +387,26 @@ void check_snapshot_values(const Impl& db, const Snapshot& s) {
 // ---- rows <-> records -------------------------------------------------------------------------
 
 JobRecord read_job(const Query& q) {
-  return JobRecord{q.text(0), q.text(1), q.text(2), q.text(3), q.text(4),
-                   q.text(5), q.text(6), q.text(7), q.text(8), q.integer(9)};
+  return JobRecord{q.text(0), q.text(1), q.text(2), q.text(3),    q.text(4), q.text(5),
+                   q.text(6), q.text(7), q.text(8), q.integer(9), q.text(10)};
+}
+
+// A job run in-process whose process is gone without finishing it (killed outright, or its
+// machine went down) is shown INTERRUPTED. Its state is read again once the process is known to
+// be gone, so a job that finished meanwhile shows as it finished.
+void show_interrupted(Impl& db, JobRecord& job) {
+  if (job.state != "RUNNING" || !job.server.empty() || job.runner.empty() ||
+      !runner_gone(job.runner))
+    return;
+  Query q(db, "SELECT state, reason FROM jobs WHERE id = ?", "cannot read the jobs");
+  q.bind(1, job.id);
+  if (!q.step()) return;
+  job.state = q.text(0);
+  job.reason = q.text(1);
+  if (job.state != "RUNNING") return;
+  job.state = "INTERRUPTED";
+  job.reason = "the process running it (" + runner_text(job.runner) +
+               ") ended without finishing it (killed?); what it stored is kept";
 }
 
 std::vector<std::string> read_columns(Impl& db, const std::string& id) {
@@ -532,14 +639,16 @@ void ResultsStore::create_job(const JobRecord& job) {
   if (job.id.empty()) throw StoreError(impl_->where() + ": a job needs an id");
   check_state(*impl_, job.id, job.state);
   impl_->call([&](StoreDb& db) {
-    Query q(
-        db,
-        std::string("INSERT INTO jobs (") + kInsertJobColumns + ") VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
-        "cannot create job '" + job.id + "'");
+    const bool own = job.state == "RUNNING" && job.server.empty() && !db.missing.count("runner");
+    Query q(db,
+            std::string("INSERT INTO jobs (") + kFirstJobColumns + (own ? ", runner" : "") +
+                ") VALUES (?, ?, ?, ?, ?, ?, ?, ?" + (own ? ", ?" : "") + ")",
+            "cannot create job '" + job.id + "'");
     q.bind(1, job.id).bind(2, job.kind).bind(3, job.spec_json).bind(4, job.state);
     q.bind(5, job.reason).bind(6, job.summary_json);
     q.bind(7, job.created_at.empty() ? utc_now("%Y-%m-%dT%H:%M:%SZ") : job.created_at);
     q.bind(8, job.finished_at);
+    if (own) q.bind(9, this_process());
     q.run();
   });
 }
@@ -573,7 +682,7 @@ void ResultsStore::upsert_remote_job(const JobRecord& job) {
   check_state(*impl_, job.id, job.state);
   impl_->call([&](StoreDb& db) {
     Query q(db,
-            std::string("INSERT INTO jobs (") + kJobColumns +
+            std::string("INSERT INTO jobs (") + kRemoteJobColumns +
                 ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (id) DO UPDATE SET kind = "
                 "excluded.kind, spec_json = excluded.spec_json, server = excluded.server, "
                 "created_at = excluded.created_at",
@@ -650,6 +759,7 @@ std::vector<JobRecord> ResultsStore::list() const {
             "cannot list the jobs");
     std::vector<JobRecord> jobs;
     while (q.step()) jobs.push_back(read_job(q));
+    for (JobRecord& job : jobs) show_interrupted(db, job);
     return jobs;
   });
 }
@@ -661,7 +771,11 @@ std::optional<JobRecord> ResultsStore::find(const std::string& id_or_prefix) con
     {
       Query q(db, "SELECT " + db.job_columns() + " FROM jobs WHERE id = ?", "cannot read the jobs");
       q.bind(1, id_or_prefix);
-      if (q.step()) return std::vector<JobRecord>{read_job(q)};
+      if (q.step()) {
+        std::vector<JobRecord> found{read_job(q)};
+        show_interrupted(db, found.front());
+        return found;
+      }
     }
     Query q(db,
             "SELECT " + db.job_columns() +
@@ -670,6 +784,7 @@ std::optional<JobRecord> ResultsStore::find(const std::string& id_or_prefix) con
     q.bind(1, id_or_prefix).bind(2, kShown + 1);
     std::vector<JobRecord> found;
     while (q.step()) found.push_back(read_job(q));
+    if (found.size() == 1) show_interrupted(db, found.front());
     return found;
   });
   if (matches.empty()) return std::nullopt;

@@ -21,13 +21,16 @@ struct JobRecord {
   std::string id;            // e.g. "j-20261124-153012-3f9a" (unique, sortable by creation)
   std::string kind;          // "twist", "bundle", ...
   std::string spec_json;     // the full job spec, Protobuf JSON mapping, defaults filled in
-  std::string state;         // QUEUED | RUNNING | SUCCEEDED | FAILED | CANCELLED
+  std::string state;         // QUEUED | RUNNING | SUCCEEDED | FAILED | CANCELLED, or (read
+                             // only, never stored) INTERRUPTED: see ResultsStore::list
   std::string reason;        // why it failed (empty otherwise)
   std::string summary_json;  // the final JSON document `--json` prints ("" until finished)
   std::string created_at;    // ISO 8601 UTC
   std::string finished_at;   // ISO 8601 UTC, "" while running
   std::string server;        // the mdemd (HOST:PORT) that runs it; "" for a job run in-process
   long last_seq = 0;         // of a daemon's job: the last event applied here (0: none yet)
+  std::string runner;        // of a job run in-process: "HOST BOOT-ID PID START-TIME" of the
+                             // process that runs it (set by create_job); "" when unknown
 };
 
 // Events of a daemon's job (mdem watch) applied together, in one transaction with the sequence
@@ -62,7 +65,9 @@ class ResultsStore {
   // A new unique job id.
   static std::string new_job_id();
 
-  void create_job(const JobRecord& job);  // state as given (normally RUNNING)
+  // State as given (normally RUNNING). A RUNNING job of no daemon is recorded as run by this
+  // process (JobRecord::runner; job.runner is ignored).
+  void create_job(const JobRecord& job);
   void finish_job(const std::string& id, const std::string& state, const std::string& reason,
                   const std::string& summary_json);
   // Sets the state and reason only (not finished_at nor the summary).
@@ -85,7 +90,10 @@ class ResultsStore {
   void append_frames(const std::string& id, const std::vector<SeriesFrame>& frames);
   void append_snapshot(const std::string& id, const Snapshot& snap);
 
-  // All jobs, newest first.
+  // All jobs, newest first. A RUNNING job of no daemon whose process is gone without finishing
+  // it (kill -9, a crash, a reboot; known for processes of this host) reads as INTERRUPTED, with
+  // a reason naming the process; nothing is written (the database may be read-only). find()
+  // alike.
   std::vector<JobRecord> list() const;
   // The job with this id, or the only job whose id starts with `id_or_prefix`; nullopt when
   // none; StoreError when the prefix is ambiguous.

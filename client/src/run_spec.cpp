@@ -31,7 +31,8 @@ void print_help(const SpecKind& kind, std::ostream& os) {
         "                       performance\n"
         "\n"
         "Exit codes: 0 success, 1 the job failed (e.g. numerical instability) or was cancelled\n"
-        "(Ctrl-C keeps what was computed), 2 usage error (bad flag or spec value).\n";
+        "(Ctrl-C, SIGTERM or SIGHUP keep what was computed), 2 usage error (bad flag or spec\n"
+        "value). A job whose process was killed outright (kill -9) is listed as INTERRUPTED.\n";
 }
 
 struct Parsed {
@@ -60,6 +61,8 @@ int execute(const SpecKind& kind, const Parsed& p, std::ostream& out, std::ostre
   Job& job = runner.job();
   // A time step above the safe limit is refused here, before anything is stored.
   job.system().initialize();
+  // From before the record exists: SIGINT, SIGTERM or SIGHUP stop the job as cancelled.
+  InterruptGuard interrupt;
   ResultsStore store(p.db);
   JobRecord rec;
   rec.id = ResultsStore::new_job_id();
@@ -91,12 +94,11 @@ int execute(const SpecKind& kind, const Parsed& p, std::ostream& out, std::ostre
     }
     progress(pr);
   };
-  InterruptGuard interrupt;
   obs.cancelled = [] { return InterruptGuard::interrupted(); };
 
   const JobOutcome outcome = runner.run(obs, [](Job& j) {
-    return "interrupted by the user; results up to t = " + std::to_string(j.system().time()) +
-           " ps are kept";
+    return std::string("interrupted (") + InterruptGuard::signal_name() +
+           "); results up to t = " + std::to_string(j.system().time()) + " ps are kept";
   });
   progress.finish();
   if (!pending.empty()) store.append_frames(rec.id, pending);

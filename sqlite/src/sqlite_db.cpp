@@ -7,7 +7,7 @@ namespace mdem {
 namespace fs = std::filesystem;
 
 SqliteDb::SqliteDb(std::string path, std::string label, const char* synchronous,
-                   int busy_timeout_ms)
+                   int busy_timeout_ms, const Recognizer& recognize)
     : path_(std::move(path)), label_(std::move(label)) {
   if (path_.empty()) throw SqliteError(label_ + ": empty path");
   const fs::path parent = fs::path(path_).parent_path();
@@ -26,12 +26,19 @@ SqliteDb::SqliteDb(std::string path, std::string label, const char* synchronous,
     if (rc != SQLITE_OK) fail("cannot open");
     sqlite3_extended_result_codes(db_, 1);
     sqlite3_busy_timeout(db_, busy_timeout_ms);
-    // The first statement reads the file header: a file that is not a database fails here.
-    exec("PRAGMA journal_mode=WAL", "cannot read (is it an SQLite database?)");
+    // The first statement only reads the file header and schema: a file that is not a database
+    // fails here, and the owner may refuse a database that is not its own, both untouched. Only
+    // then is the journal switched to WAL (which rewrites the header).
+    exec("SELECT COUNT(*) FROM sqlite_master", "cannot read (is it an SQLite database?)");
+    if (recognize) recognize(*this);
+    exec("PRAGMA journal_mode=WAL", "cannot switch to WAL");
     exec((std::string("PRAGMA synchronous=") + synchronous).c_str(), "cannot configure");
     exec("PRAGMA foreign_keys=ON", "cannot configure");
   } catch (...) {
-    sqlite3_close_v2(db_);  // the destructor does not run when the constructor throws
+    // The destructor does not run when the constructor throws.
+    for (auto& [sql, s] : statements_) sqlite3_finalize(s);
+    statements_.clear();
+    sqlite3_close_v2(db_);
     throw;
   }
 }

@@ -5,6 +5,7 @@
 // label the owner gives, e.g. "job database '/var/lib/mdemd/jobs.db'") and SQLite's message.
 #include <sqlite3.h>
 
+#include <functional>
 #include <map>
 #include <mutex>
 #include <stdexcept>
@@ -18,11 +19,16 @@ struct SqliteError : std::runtime_error {
 
 class SqliteDb {
  public:
+  // Checks that an opened file is the owner's (its tables, say), reading only; throws to refuse
+  // it. Runs before anything is written or any pragma changes the file.
+  using Recognizer = std::function<void(SqliteDb&)>;
+
   // Opens (creating) the file in WAL mode with foreign keys on, the given synchronous level
   // ("NORMAL" or "FULL") and a busy timeout. Creates missing parent directories. A file the
-  // process may not write is opened read-only (readable; writes fail with SqliteError).
+  // process may not write is opened read-only (readable; writes fail with SqliteError). A file
+  // that is not an SQLite database, or that `recognize` refuses, is left exactly as it was.
   SqliteDb(std::string path, std::string label, const char* synchronous = "NORMAL",
-           int busy_timeout_ms = 10000);
+           int busy_timeout_ms = 10000, const Recognizer& recognize = {});
   ~SqliteDb();
   SqliteDb(const SqliteDb&) = delete;
   SqliteDb& operator=(const SqliteDb&) = delete;
