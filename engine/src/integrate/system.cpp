@@ -193,10 +193,13 @@ void System::initialize() {
 
   dissipative_ = s.local_damping > 0;
   bool model_damping = false;
-  for (const auto& m : models_) model_damping = model_damping || m->dissipative();
+  for (const auto& m : models_) {
+    model_damping = model_damping || m->dissipative();
+    m->bind_domain(domain_.get());
+  }
   dissipative_ = dissipative_ || model_damping;
   try {
-    pairs_.setup(models_, s.skin, domain_);
+    pairs_.setup(models_, s.skin, *domain_);
   } catch (const std::invalid_argument& e) {
     bad(e.what());
   }

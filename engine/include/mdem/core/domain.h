@@ -36,6 +36,17 @@ class Domain {
     return d;
   }
 
+  // The image of x_j nearest x_i: x_i + delta(x_i, x_j), but exactly x_j when no box length is
+  // removed (so an open domain changes no bit). For bonded pairs, whose kinematics take both
+  // positions.
+  Vec3 image(const Vec3& xi, const Vec3& xj) const {
+    if (!any_periodic_) return xj;
+    Vec3 y = xj;
+    for (int a = 0; a < 3; ++a)
+      if (periodic_[a]) y[a] -= length_[a] * std::nearbyint((xj[a] - xi[a]) * inv_length_[a]);
+    return y;
+  }
+
   // x moved into [lo, hi) along the periodic axes (unchanged along the others).
   Vec3 wrap(const Vec3& x) const {
     Vec3 w = x;
@@ -57,5 +68,8 @@ class Domain {
   std::array<bool, 3> periodic_{false, false, false};
   bool any_periodic_ = false;
 };
+
+// The domain of a model no system has bound yet: open on every axis.
+inline const Domain kOpenDomain{};
 
 }  // namespace mdem

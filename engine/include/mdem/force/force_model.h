@@ -13,6 +13,7 @@
 #include <string_view>
 #include <vector>
 
+#include "mdem/core/domain.h"
 #include "mdem/core/elements.h"
 #include "mdem/core/energy.h"
 #include "mdem/neighbor/kind_pairs.h"
@@ -105,10 +106,18 @@ class ForceModel {
   virtual void add_stiffness(const Elements& el, const NeighborList* pairs,
                              StiffnessSums& s) const = 0;
 
+  // The box every displacement of the model is a minimum image in (open until a system binds its
+  // own domain at initialize; pair models take it from their sub-list, bonds from here).
+  void bind_domain(const Domain* d) { domain_ = d ? d : &kOpenDomain; }
+  const Domain& domain() const { return *domain_; }
+
   // State that changes during a run (a bond's plastic slip, broken flags), for checkpoints; the
   // system saves and loads it in a section named after the model. Stateless models keep these.
   virtual void save_state(StateWriter&) const {}
   virtual void load_state(StateReader&) {}
+
+ private:
+  const Domain* domain_ = &kOpenDomain;
 };
 
 using ForceModelPtr = std::unique_ptr<ForceModel>;

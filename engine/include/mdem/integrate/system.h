@@ -154,10 +154,10 @@ class System {
   // effect at the next initialize(); a periodic axis must be at least 2·(cutoff + skin) long for
   // every pair model (else initialize throws ConfigError).
   void set_domain(const Domain& d) {
-    domain_ = d;
+    *domain_ = d;
     initialized_ = false;
   }
-  const Domain& domain() const { return domain_; }
+  const Domain& domain() const { return *domain_; }
 
   // Recomputes forces and energies at the current state without moving (after a caller edited
   // positions or models).
@@ -176,7 +176,7 @@ class System {
   IntegratorSettings settings_;
   std::vector<ForceModelPtr> models_;
   std::vector<std::shared_ptr<Updater>> updaters_;
-  Domain domain_;
+  std::unique_ptr<Domain> domain_ = std::make_unique<Domain>();  // models point to it
   PairTable pairs_;  // per-kind-pair table: the pair models' neighbour sub-lists
   ForceSink sink_;
   std::vector<Vec3> fd_, td_;  // damping force / torque (model dampers + local damping)

@@ -167,7 +167,8 @@ BondStress GrainBond::stress(const Elements& el, std::size_t k) const {
   const GrainBondRecord& rec = bonds_.at(k);
   if (rec.broken) return {};
   const Bond b = effective_bond(rec);
-  return stress_of(rec, bond_deformation(b, el.x[b.i], el.q[b.i], el.x[b.j], el.q[b.j]));
+  return stress_of(rec, bond_deformation(b, el.x[b.i], el.q[b.i],
+                                         domain().image(el.x[b.i], el.x[b.j]), el.q[b.j]));
 }
 
 void GrainBond::compute(const Elements& el, const NeighborList*, ForceSink& sink) const {
@@ -176,6 +177,7 @@ void GrainBond::compute(const Elements& el, const NeighborList*, ForceSink& sink
   if (nt < 1) throw std::logic_error("grain_bond: force sink has no thread buffers");
   const long nb = static_cast<long>(bonds_.size());
   const Vec3* x = el.x.data();
+  const Domain& dom = domain();
   const Quat* q = el.q.data();
   const double* radius = el.radius.data();
   const BondBehaviour behaviour = p_.behaviour;
@@ -193,9 +195,10 @@ void GrainBond::compute(const Elements& el, const NeighborList*, ForceSink& sink
       GrainBondRecord& rec = bonds_[k];  // this thread's alone
       const std::uint32_t i = rec.bond.i, j = rec.bond.j;
       const double ri = radius[i], rj = radius[j];
+      const Vec3 xj = dom.image(x[i], x[j]);  // the image of j bonded to i
       // Post-break contact: pushes when the centres are closer than the bonding distance.
       auto contact = [&](double& energy) {
-        const Vec3 d = x[j] - x[i];
+        const Vec3 d = xj - x[i];
         const double r = d.norm();
         const double u = rec.length - r;
         if (!(u > 0) || !(r > 0)) return;
@@ -210,11 +213,11 @@ void GrainBond::compute(const Elements& el, const NeighborList*, ForceSink& sink
         continue;
       }
       if (behaviour == BondBehaviour::Plastic)
-        released += return_map(rec, strength, x[i], q[i], x[j], q[j]);
+        released += return_map(rec, strength, x[i], q[i], xj, q[j]);
       const Bond b = effective_bond(rec);
-      const BondResult r = bond_eval(b, x[i], q[i], x[j], q[j]);
+      const BondResult r = bond_eval(b, x[i], q[i], xj, q[j]);
       if (behaviour == BondBehaviour::Brittle) {
-        const BondStress s = stress_of(rec, bond_deformation(b, x[i], q[i], x[j], q[j]));
+        const BondStress s = stress_of(rec, bond_deformation(b, x[i], q[i], xj, q[j]));
         if (s.sigma >= strength || s.tau >= 0.5 * strength) {
           // Breaks for good: its stored energy goes, the contact's (if any) replaces it.
           rec.broken = true;
@@ -369,6 +372,7 @@ void GrainDashpots::compute(const Elements& el, const NeighborList* pairs, Force
   const double beta2 = 2.0 * ratio_;
   const bool threaded = std::max(n, nb) >= kParallelMinItems;
   const Vec3* x = el.x.data();
+  const Domain& dom = domain();
   const Vec3* v = el.v.data();
   const double* mass = el.mass.data();
   const double* radius = el.radius.data();
@@ -390,7 +394,7 @@ void GrainDashpots::compute(const Elements& el, const NeighborList* pairs, Force
     for (long k = 0; k < nb; ++k) {
       const GrainBondRecord& rec = recs[k];
       const std::size_t i = rec.bond.i, j = rec.bond.j;
-      const Vec3 d = x[j] - x[i];
+      const Vec3 d = dom.delta(x[i], x[j]);
       const double r = d.norm();
       if (!(r > 0)) continue;
       double kn;

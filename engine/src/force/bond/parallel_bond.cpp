@@ -165,6 +165,7 @@ void ParallelBond::compute(const Elements& el, const NeighborList*, ForceSink& s
   const std::size_t nb = bonds_.size();
   const Vec3* x = el.x.data();
   const Quat* q = el.q.data();
+  const Domain& dom = domain();
 #pragma omp parallel num_threads(nt) if (static_cast <long>(nb) >= kParallelMinItems)
   {
     const int tid = omp_get_thread_num();
@@ -174,7 +175,7 @@ void ParallelBond::compute(const Elements& el, const NeighborList*, ForceSink& s
 #pragma omp for schedule(static)
     for (std::size_t k = 0; k < nb; ++k) {
       const Bond& b = bonds_[k];
-      tally.apply(bond_eval(b, x[b.i], q[b.i], x[b.j], q[b.j]), b.i, b.j, f, t);
+      tally.apply(bond_eval(b, x[b.i], q[b.i], dom.image(x[b.i], x[b.j]), q[b.j]), b.i, b.j, f, t);
     }
     tally.add_to(sink.energy(tid));
   }
