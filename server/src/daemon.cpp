@@ -159,11 +159,12 @@ Daemon::Daemon(const DaemonConfig& config)
                        "' (address in use, or not HOST:PORT?)");
   }
   server_->GetHealthCheckService()->SetServingStatus(true);
+  scheduler_->start();
+  if (!config_.port_file.empty()) write_port_file(config_.port_file, port_);
+  // Last: nothing after it can throw, so the monitor never outlives the server it reports to.
   storage_->start(std::chrono::seconds(1), [this](bool serving) {
     server_->GetHealthCheckService()->SetServingStatus(serving);
   });
-  scheduler_->start();
-  if (!config_.port_file.empty()) write_port_file(config_.port_file, port_);
   spdlog::info(
       "event=serving listen={} port={} tls={} workers={} threads_per_job={} "
       "checkpoint_every_s={} data_dir={}",
