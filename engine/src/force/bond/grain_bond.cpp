@@ -328,9 +328,14 @@ GrainDashpots::GrainDashpots(double ratio, const GrainBond* bonds, double contac
           "grain dashpots max_radius must be finite and > 0 nm, got " + std::to_string(max_radius));
 }
 
-bool GrainContactDashpotKernel::excludes(const Elements& el, std::size_t i, std::size_t j) const {
+bool grain_contact_excluded(const Elements& el, std::size_t i, std::size_t j,
+                            const GrainBond* bonds) {
   if (el.kind[i] != ElementKind::Grain || el.kind[j] != ElementKind::Grain) return true;
-  return bonds_ && bonds_->owns(i, j);
+  return bonds && bonds->owns(i, j);
+}
+
+bool GrainContactDashpotKernel::excludes(const Elements& el, std::size_t i, std::size_t j) const {
+  return grain_contact_excluded(el, i, j, bonds_);
 }
 
 bool GrainContactDashpotKernel::pair(const Elements& el, std::size_t i, std::size_t j,

@@ -22,8 +22,7 @@ LinearContactKernel::LinearContactKernel(double youngs, double max_radius, const
 }
 
 bool LinearContactKernel::excludes(const Elements& el, std::size_t i, std::size_t j) const {
-  if (el.kind[i] != ElementKind::Grain || el.kind[j] != ElementKind::Grain) return true;
-  return bonds_ && bonds_->owns(i, j);
+  return grain_contact_excluded(el, i, j, bonds_);
 }
 
 double LinearContactKernel::stiffness(double ri, double rj) const {

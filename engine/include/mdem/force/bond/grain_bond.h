@@ -98,6 +98,11 @@ class GrainBond final : public ForceModel {
 // intact bond and every pair in linear contact (grain–grain, post-break, grain–platen), a force
 // −c·(n·v_rel)·n along the centre line (the platen normal), c = 2β√(m_eff·k_n) with the pair's
 // normal stiffness and reduced mass (the grain's mass against a platen).
+// Whether (i, j) is not an unbonded Grain–Grain pair (either is not a grain, or bonds, which may be
+// null, holds a record of the pair): the pairs the linear contact and its dashpots leave out.
+bool grain_contact_excluded(const Elements& el, std::size_t i, std::size_t j,
+                            const GrainBond* bonds);
+
 // The pair part of GrainDashpots (pair_driver.h): unbonded Grain–Grain pairs in contact, the
 // pairs of the linear contact it belongs to.
 class GrainContactDashpotKernel {
