@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "mdem/force/contact/anisotropic_vdw.h"
 #include "mdem/io/state_io.h"
 #include "mdem/job/bundle_job.h"
 #include "mdem/job/compression_job.h"
@@ -364,6 +365,63 @@ TEST(Stages, StopConditionsAreCheckedAtConstruction) {
   expect_refused(StopCondition::after(std::nan("")), "duration");
   expect_refused(StopCondition::when(std::make_shared<ForceBalance>(1.0), 0, 10), "check_every");
   EXPECT_THROW(ForceBalance(0.0), std::invalid_argument);
+}
+
+// A seven-tube bundle bound by vdW, then the same bundle with the vdW contact switched off by its
+// second stage: the tubes no longer interact.
+class Unbind final : public Job {
+ public:
+  Unbind() : sys_(make_bundle_system(bundle(), two_threads(0.0))) {
+    vdw_ = sys_.find<AnisotropicVdw>();
+    SystemStage::Settings bound;
+    bound.stop = StopCondition::after_steps(100);
+    add_stage(std::make_unique<SystemStage>("bound", *this, std::move(bound)));
+    SystemStage::Settings unbound;
+    unbound.inactive_models = {vdw_};
+    unbound.stop = StopCondition::after_steps(200);
+    add_stage(std::make_unique<SystemStage>("unbound", *this, std::move(unbound)));
+  }
+  static BundleSpec bundle() {
+    BundleSpec b;
+    b.tubes = 7;
+    b.segments = 4;
+    return b;
+  }
+  std::string_view kind() const override { return "unbind"; }
+  System& system() override { return sys_; }
+  double duration() const override { return 0; }
+  std::vector<std::string> columns() const override { return energy_columns({EnergyTerm::Vdw}); }
+  std::vector<double> observe() override { return energy_values(sys_, {EnergyTerm::Vdw}); }
+  Summary summary() override { return {}; }
+  const AnisotropicVdw* vdw() const { return vdw_; }
+
+ private:
+  System sys_;
+  const AnisotropicVdw* vdw_ = nullptr;
+};
+
+TEST(Stages, AStageCanSwitchAForceModelOff) {
+  Unbind job;
+  const auto vdw = static_cast<int>(EnergyTerm::Vdw);
+  double bound_vdw = 0;
+  bool active_when_bound = false;
+  JobObserver obs;
+  obs.progress = [&](const JobProgress& p) {
+    if (p.stage == "bound" && p.stage_step == 100) {  // the bound stage's end
+      bound_vdw = job.system().energy().potential.stored[vdw];
+      active_when_bound = job.system().model_active(job.vdw());
+    }
+  };
+  EXPECT_EQ(run_job(job, {1.0, 0.0}, obs).steps, 300);
+  EXPECT_LT(bound_vdw, -1.0);  // eV: seven tubes side by side are bound
+  EXPECT_TRUE(active_when_bound);
+  EXPECT_FALSE(job.system().model_active(job.vdw()));
+  EXPECT_EQ(job.system().energy().potential.stored[vdw], 0.0);
+  // Switching the contact off is booked as work (the binding energy given back), so the
+  // balance still closes to Verlet's few per cent and nothing was dissipated.
+  EXPECT_NEAR(job.system().energy().external_work, -bound_vdw, 0.1 * -bound_vdw);
+  EXPECT_LT(job.system().energy_balance_error(), 0.05);
+  EXPECT_EQ(job.system().energy().dissipated, 0.0);
 }
 
 // ---- the bundle run as an ordinary job ----

@@ -163,6 +163,17 @@ void System::set_local_damping(double alpha) {
   dissipative_ = dissipative_ || alpha > 0;
 }
 
+void System::set_model_active(const ForceModel* m, bool active) {
+  if (std::none_of(models_.begin(), models_.end(), [m](const auto& p) { return p.get() == m; }))
+    throw std::invalid_argument("System::set_model_active: not a model of this system");
+  std::erase(inactive_, m);
+  if (!active) inactive_.push_back(m);
+}
+
+bool System::model_active(const ForceModel* m) const {
+  return std::find(inactive_.begin(), inactive_.end(), m) == inactive_.end();
+}
+
 void System::initialize() {
   const IntegratorSettings& s = settings_;
   auto bad = [](const std::string& m) { throw ConfigError(m); };
@@ -250,10 +261,18 @@ void System::refresh() {
   update_kinetic();
 }
 
+void System::refresh_booking_work() {
+  const double before = ledger_.potential.total_stored();
+  refresh();
+  ledger_.external_work += ledger_.potential.total_stored() - before;
+  update_energy_scale();
+}
+
 void System::compute_forces() {
   pairs_.update(el_);
   sink_.clear();
-  for (const auto& m : models_) m->compute(el_, pairs_.list_of(m.get()), sink_);
+  for (const auto& m : models_)
+    if (inactive_.empty() || model_active(m.get())) m->compute(el_, pairs_.list_of(m.get()), sink_);
   ledger_.potential = sink_.reduce(el_.f, el_.t, fd_, td_);
 
   // PFC local damping on the unbalanced force of every free DOF: F_k -= α|F_k| sign(v_k).
@@ -306,7 +325,9 @@ void System::update_kinetic() {
 double System::compute_critical_dt() const {
   StiffnessSums s;
   s.reset(el_.size());
-  for (const auto& m : models_) m->add_stiffness(el_, pairs_.list_of(m.get()), s);
+  for (const auto& m : models_)
+    if (inactive_.empty() || model_active(m.get()))
+      m->add_stiffness(el_, pairs_.list_of(m.get()), s);
   double dt = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < el_.size(); ++i) {
     const double m = el_.mass[i];

@@ -150,6 +150,12 @@ JobRunResult run_job(Job& job, const JobCadence& cadence, const JobObserver& obs
   JobRunResult r;
   const int stage_count = static_cast<int>(job.stages().size());
   while (Stage* st = job.current_stage()) {
+    // Between stages (the first stage starts as it always did: initialized, step 0 reported).
+    if (obs.cancelled && job.stage_index() > 0 && !job.stage_begun() && obs.cancelled()) {
+      r.cancelled = true;
+      r.steps = series_step(job);
+      return r;
+    }
     const bool fresh = !job.stage_begun();
     job.begin_stage();
     System& sys = st->system();

@@ -62,18 +62,21 @@ void SystemStage::install() {
   u.insert(u.end(), s_.observers.begin(), s_.observers.end());
   sys.set_updaters(std::move(u));
   if (s_.local_damping) sys.set_local_damping(*s_.local_damping);
+  for (const auto& m : sys.models())
+    sys.set_model_active(m.get(), std::find(s_.inactive_models.begin(), s_.inactive_models.end(),
+                                            m.get()) == s_.inactive_models.end());
 }
 
 void SystemStage::begin() {
   System& sys = system();
   // A system that has run keeps its state: initializing would reset its energy ledger and guard
   // figures. One at step 0 is initialized afresh (callers may have initialized it to check dt).
-  // A later stage on a running system with damping of its own re-evaluates the damping forces
-  // at the current state, so its first step is damped as the stage says.
+  // A later stage on a running system re-evaluates the forces at the current state, so that its
+  // first step has the stage's damping and models.
   if (sys.steps() == 0 || !sys.initialized())
     sys.initialize();
-  else if (s_.local_damping)
-    sys.refresh();
+  else
+    sys.refresh_booking_work();
   start_step_ = sys.steps();
   const StopCondition& c = s_.stop;
   if (c.duration_ps > 0)

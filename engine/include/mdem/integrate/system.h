@@ -105,6 +105,11 @@ class System {
   // PFC local damping α in [0, 1) from the next force evaluation on (a stage's damping); throws
   // ConfigError outside the range.
   void set_local_damping(double alpha);
+  // Whether a model of this system acts (a stage's active models): an inactive one adds no force,
+  // energy or stiffness from the next evaluation on, and keeps its state. Throws
+  // std::invalid_argument for a model the system does not hold.
+  void set_model_active(const ForceModel* m, bool active);
+  bool model_active(const ForceModel* m) const;
 
   // Validates the settings, builds the neighbour list if any model needs one, evaluates forces
   // and energies, computes the critical step and picks or checks dt. Throws ConfigError for a dt
@@ -162,6 +167,10 @@ class System {
   // Recomputes forces and energies at the current state without moving (after a caller edited
   // positions or models).
   void refresh();
+  // refresh() after a change of models or settings at a stage boundary: the change in stored
+  // energy it makes is booked as external work (the work of switching), so the energy balance
+  // stays closed and the guard does not read it as an instability.
+  void refresh_booking_work();
   // Critical step of the current configuration (does not change dt).
   double compute_critical_dt() const;
 
@@ -176,6 +185,7 @@ class System {
   IntegratorSettings settings_;
   std::vector<ForceModelPtr> models_;
   std::vector<std::shared_ptr<Updater>> updaters_;
+  std::vector<const ForceModel*> inactive_;  // models switched off by the current stage
   std::unique_ptr<Domain> domain_ = std::make_unique<Domain>();  // models point to it
   PairTable pairs_;  // per-kind-pair table: the pair models' neighbour sub-lists
   ForceSink sink_;

@@ -93,8 +93,8 @@ class ForceBalance final : public StopCriterion {
 };
 
 // The common stage: the job's system under a protocol (or none: hands-off), with observers that
-// sample every step, an optional local damping of its own, and a stop condition. Updaters are
-// applied in the order protocol, observers.
+// sample every step, its own local damping and active force models, and a stop condition. Updaters
+// are applied in the order protocol, observers.
 class SystemStage final : public Stage {
  public:
   struct Settings {
@@ -102,6 +102,9 @@ class SystemStage final : public Stage {
     std::vector<std::shared_ptr<Updater>> observers;  // stateful samplers and trackers
     // PFC local damping α of this stage; empty: the system's own setting.
     std::optional<double> local_damping;
+    // Force models of the job's system that do not act during this stage (e.g. contact dashpots
+    // in an undamped hold); every other model acts.
+    std::vector<const ForceModel*> inactive_models;
     StopCondition stop;
   };
   // Throws std::invalid_argument for a stop condition that is not exactly one of a positive
