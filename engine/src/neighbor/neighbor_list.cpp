@@ -259,16 +259,12 @@ void NeighborList::build(const Elements& el) {
             }
           });
         }
-        if (!all_kinds) {
+        if (!all_kinds || exclusion) {  // one pass over the pairs within range
           std::uint32_t* w = first;
           for (std::uint32_t* r = first; r != o; ++r)
-            if (kinds_.has(el.kind[i], el.kind[*r])) *w++ = *r;
-          o = w;
-        }
-        if (exclusion) {
-          std::uint32_t* w = first;
-          for (std::uint32_t* r = first; r != o; ++r)
-            if (!(*exclusion)(el, i, *r)) *w++ = *r;
+            if ((all_kinds || kinds_.has(el.kind[i], el.kind[*r])) &&
+                !(exclusion && (*exclusion)(el, i, *r)))
+              *w++ = *r;
           o = w;
         }
         // Insertion sort: a few to a few dozen entries, in ascending runs (one per cell).
