@@ -72,8 +72,10 @@ void run(const K& k, const Elements& el, const NeighborList& list, ForceSink& si
       for (long i = 0; i < n; ++i) k.prepare(el, i);
     }
     const int tid = omp_get_thread_num();
-    Vec3* f = K::kDissipative ? sink.damping_force(tid) : sink.force(tid);
-    Vec3* t = K::kDissipative ? sink.damping_torque(tid) : sink.torque(tid);
+    // The thread's own buffers alias nothing the kernel reads (positions, caches, parameters),
+    // so the compiler may keep those in registers across the stores.
+    Vec3* __restrict f = K::kDissipative ? sink.damping_force(tid) : sink.force(tid);
+    Vec3* __restrict t = K::kDissipative ? sink.damping_torque(tid) : sink.torque(tid);
     double energy = 0.0;
 #pragma omp for schedule(static, 64)
     for (long i = 0; i < n; ++i) {
