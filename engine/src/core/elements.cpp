@@ -22,6 +22,7 @@ std::size_t Elements::add(const ElementInit& e) {
           "must be finite and > 0 about every principal axis");
   require(std::isfinite(e.radius) && e.radius > 0, "radius", "must be finite and > 0");
 
+  tag.push_back(next_tag++);
   x.push_back(e.x);
   q.push_back(e.q.normalized());
   v.push_back(e.v);
@@ -43,6 +44,23 @@ std::size_t Elements::add(const ElementInit& e) {
   f.push_back(Vec3::Zero());
   t.push_back(Vec3::Zero());
   return x.size() - 1;
+}
+
+std::size_t Elements::index_of(std::uint64_t t) const {
+  // Elements not reordered since they were built sit at their tag; otherwise search.
+  if (t < tag.size() && tag[t] == t) return static_cast<std::size_t>(t);
+  for (std::size_t i = 0; i < tag.size(); ++i)
+    if (tag[i] == t) return i;
+  throw std::out_of_range("no element has tag " + std::to_string(t) + " (" +
+                          std::to_string(tag.size()) + " elements)");
+}
+
+std::vector<std::size_t> Elements::group_indices(std::string_view name) const {
+  const std::vector<std::uint64_t>& tags = groups.get(name);
+  std::vector<std::size_t> out;
+  out.reserve(tags.size());
+  for (std::uint64_t t : tags) out.push_back(index_of(t));
+  return out;
 }
 
 }  // namespace mdem

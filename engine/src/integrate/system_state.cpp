@@ -41,6 +41,7 @@ void save_elements(StateWriter& w, const Elements& el) {
   w.put(el.kind);
   w.put(el.tube);
   w.put(el.index);
+  w.put(el.tag);
 }
 
 void load_elements(StateReader& r, Elements& el) {
@@ -72,6 +73,7 @@ void load_elements(StateReader& r, Elements& el) {
   expect_same(r, el.kind, "kind");
   expect_same(r, el.tube, "tube");
   expect_same(r, el.index, "index");
+  expect_same(r, el.tag, "tag");
 }
 
 void save_ledger(StateWriter& w, const EnergyLedger& L) {

@@ -5,8 +5,10 @@
 #include <array>
 #include <cstdint>
 #include <cstdlib>
+#include <string_view>
 #include <vector>
 
+#include "mdem/core/groups.h"
 #include "mdem/core/math.h"
 
 namespace mdem {
@@ -38,6 +40,11 @@ struct ElementInit {
 };
 
 struct Elements {
+  // Identity: a global id given by add() (0, 1, 2, ... in order of creation) that stays with the
+  // element if the arrays are ever reordered; outputs and groups name elements by tag.
+  std::vector<std::uint64_t> tag;
+  // Named sets of elements (by tag), declared by the scene or job that built them.
+  Groups groups;
   // State.
   std::vector<Vec3> x;  // centre position (nm)
   std::vector<Quat> q;  // orientation, unit quaternion, body -> world; a CNT axis is body x
@@ -60,12 +67,21 @@ struct Elements {
   // Interaction results of the last force evaluation (internal forces only, no external load).
   std::vector<Vec3> f;
   std::vector<Vec3> t;
+  // The tag add() gives next (one past the largest given so far).
+  std::uint64_t next_tag = 0;
 
   std::size_t size() const { return x.size(); }
 
-  // Appends one element; returns its index. Throws std::invalid_argument on a non-finite or
-  // non-positive mass, inertia or radius, or a non-finite position, orientation or velocity.
+  // Appends one element with the next tag; returns its index. Throws std::invalid_argument on a
+  // non-finite or non-positive mass, inertia or radius, or a non-finite position, orientation or
+  // velocity.
   std::size_t add(const ElementInit& e);
+
+  // Current index of the element tagged `tag`. Throws std::out_of_range for an unknown tag.
+  std::size_t index_of(std::uint64_t tag) const;
+  // Current indices of a group's elements, in tag order. Throws std::invalid_argument naming the
+  // known groups when there is no group `name`.
+  std::vector<std::size_t> group_indices(std::string_view name) const;
 
   // Axis of a CNT segment (body x in world frame).
   Vec3 axis(std::size_t i) const { return q[i] * Vec3::UnitX(); }

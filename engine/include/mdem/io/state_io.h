@@ -131,7 +131,8 @@ class StateReader {
 
 // Format version of everything written after the header; bump it when any save_state changes.
 // 2: staged jobs (the stage index, finished stages' results, then the current stage's state).
-inline constexpr std::uint32_t kCheckpointVersion = 2;
+// 3: element tags (checked against the job's, like the other element properties).
+inline constexpr std::uint32_t kCheckpointVersion = 3;
 
 // A part of a job that a run changes and a checkpoint must carry (a protocol, an observer, a
 // stage): it writes and reads its own state, so no job lists fields in a checkpoint by hand.
