@@ -96,12 +96,13 @@ TEST(TwistJob, TwistRelaxationHoldsGripPositionsAndFreesTheirSpin) {
   sys.initialize();
   sys.run(static_cast<long>(std::ceil(2.0 / sys.dt())) + 2);  // just past the ramp
   const Elements& el = sys.elements();
+  const std::vector<std::size_t> grip_a = el.group_indices(kRopeGripA);
   std::vector<Vec3> held;
-  for (std::size_t i : job.rope().grip_a) held.push_back(el.x[i]);
+  for (std::size_t i : grip_a) held.push_back(el.x[i]);
   sys.run(200);
   double spin = 0;
-  for (std::size_t k = 0; k < job.rope().grip_a.size(); ++k) {
-    const std::size_t i = job.rope().grip_a[k];
+  for (std::size_t k = 0; k < grip_a.size(); ++k) {
+    const std::size_t i = grip_a[k];
     EXPECT_LT((el.x[i] - held[k]).norm(), 1e-12);
     EXPECT_EQ(el.f_ext[i].norm(), 0.0);
     EXPECT_EQ(el.t_ext[i].norm(), 0.0);
@@ -120,11 +121,12 @@ TEST(TwistJob, PerElementGripLoadPutsTheTorqueOnEveryElement) {
   job.system().initialize();
   job.system().run(200);  // past the 3 ps ramp at ~20 fs
   const Elements& el = job.system().elements();
-  for (std::size_t i : job.rope().grip_b) {
+  for (std::size_t i : el.group_indices(kRopeGripB)) {
     EXPECT_NEAR(el.t_ext[i].z(), units::nNnm(3.0), 1e-9);
     EXPECT_EQ(el.f_ext[i].norm(), 0.0);
   }
-  for (std::size_t i : job.rope().grip_a) EXPECT_NEAR(el.t_ext[i].z(), -units::nNnm(3.0), 1e-9);
+  for (std::size_t i : el.group_indices(kRopeGripA))
+    EXPECT_NEAR(el.t_ext[i].z(), -units::nNnm(3.0), 1e-9);
 }
 
 // The rope's own section: charge 0 as built; spread in-plane by 1.5 (no neighbour within

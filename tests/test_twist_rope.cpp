@@ -89,10 +89,12 @@ TEST(HexRope, BuildsTubesGripsAndInternalSites) {
   EXPECT_EQ(rope.tubes.size(), 37u);
   EXPECT_EQ(el.size(), 37u * 20);
   EXPECT_EQ(bonds.bonds().size(), 37u * 19);
-  EXPECT_EQ(rope.grip_a.size(), 37u * 2);
-  EXPECT_EQ(rope.grip_b.size(), 37u * 2);
-  for (std::size_t i : rope.grip_a) EXPECT_LT(el.x[i].z(), 0);
-  for (std::size_t i : rope.grip_b) EXPECT_GT(el.x[i].z(), 0);
+  const std::vector<std::size_t> grip_a = el.group_indices(kRopeGripA),
+                                 grip_b = el.group_indices(kRopeGripB);
+  EXPECT_EQ(grip_a.size(), 37u * 2);
+  EXPECT_EQ(grip_b.size(), 37u * 2);
+  for (std::size_t i : grip_a) EXPECT_LT(el.x[i].z(), 0);
+  for (std::size_t i : grip_b) EXPECT_GT(el.x[i].z(), 0);
   int internal = 0;
   for (bool b : rope.internal) internal += b;
   EXPECT_EQ(internal, 19);  // rings 0..2
@@ -255,21 +257,23 @@ TEST(TwistProtocol, ScheduleRampsHoldsAndUnloads) {
 TEST(TwistProtocol, GripLoadIsAPureMomentOfTheSetSize) {
   Rope rope;
   System sys = rope_system(rope, 4, 12);
+  const std::vector<std::size_t> grip_a = sys.elements().group_indices(kRopeGripA),
+                                 grip_b = sys.elements().group_indices(kRopeGripB);
   TwistLoading l{units::nNnm(30), units::nNnm(1), 10, TwistBoundary::ConstantMoment, false, 0};
-  TwistProtocol p(l, rope.grip_a, rope.grip_b);
+  TwistProtocol p(l, grip_a, grip_b);
   // Perturb the grips so the load is not computed on a symmetric layout only.
   Elements& el = sys.elements();
   for (std::size_t k = 0; k < el.size(); ++k)
     el.x[k] += 0.05 * Vec3(std::sin(k), std::cos(3.0 * k), 0);
   p.apply(sys, 35.0);  // holding (ramp 30 ps): T = 30 nN·nm
-  for (const auto* grip : {&rope.grip_a, &rope.grip_b}) {
+  for (const auto* grip : {&grip_a, &grip_b}) {
     const Vec3 c = mass_centroid(el, *grip);
     Vec3 force = Vec3::Zero(), moment = Vec3::Zero();
     for (std::size_t i : *grip) {
       force += el.f_ext[i];
       moment += (el.x[i] - c).cross(el.f_ext[i]) + el.t_ext[i];
     }
-    const double sign = grip == &rope.grip_b ? 1.0 : -1.0;
+    const double sign = grip == &grip_b ? 1.0 : -1.0;
     EXPECT_NEAR(moment.z(), sign * units::nNnm(30), 1e-9);
     EXPECT_NEAR(force.norm(), 0, 1e-9);
     EXPECT_NEAR(moment.x(), 0, 1e-9);
@@ -281,12 +285,13 @@ TEST(ShiftAngle, FollowsARigidTurnOfOneEndPastHalfATurn) {
   Rope rope;
   System sys = rope_system(rope, 3, 10);
   Elements& el = sys.elements();
+  const std::vector<std::size_t> grip_b = el.group_indices(kRopeGripB);
   ShiftAngle shift(el, rope);
   const std::vector<Vec3> x0 = el.x;
   double got = 0;
   for (int k = 1; k <= 40; ++k) {
     const double phi = k * 0.1;  // up to 4 rad > π
-    for (std::size_t i : rope.grip_b) {
+    for (std::size_t i : grip_b) {
       const Eigen::AngleAxisd R(phi, Vec3::UnitZ());
       el.x[i] = R * x0[i];
     }

@@ -57,8 +57,11 @@ Elements with_platens(const PackedParticle& packed, const PackingSpec& p) {
   // grain keeps it negligible next to the work done.
   const double mass =
       p.material.density * 4.0 / 3.0 * std::numbers::pi * std::pow(p.grain_r_max, 3);
-  add_platen(el, Vec3(0, 0, top), Vec3(0, 0, -1), mass, p.r_outer);
-  add_platen(el, Vec3(0, 0, bottom), Vec3(0, 0, 1), mass, p.r_outer);
+  const std::size_t t = add_platen(el, Vec3(0, 0, top), Vec3(0, 0, -1), mass, p.r_outer);
+  const std::size_t b = add_platen(el, Vec3(0, 0, bottom), Vec3(0, 0, 1), mass, p.r_outer);
+  el.groups.add(std::string(kTopPlaten), {el.tag[t]});
+  el.groups.add(std::string(kBottomPlaten), {el.tag[b]});
+  el.groups.add(std::string(kPlatens), {el.tag[t], el.tag[b]});
   return el;
 }
 
@@ -171,9 +174,9 @@ void CompressionJob::build(PackedParticle packed) {
   sys_ = std::make_unique<System>(with_platens(packed_, p), settings_);
   System& sys = *sys_;
   n_grains_ = packed_.grains.size();
-  top_ = n_grains_;
-  bottom_ = n_grains_ + 1;
   const Elements& el = sys.elements();
+  top_ = el.group_indices(kTopPlaten).front();
+  bottom_ = el.group_indices(kBottomPlaten).front();
   z_top0_ = el.x[top_].z();
   z_bottom0_ = el.x[bottom_].z();
   height0_ = z_top0_ - z_bottom0_;

@@ -37,7 +37,9 @@ System build_system(const TwistJobSpec& spec, IntegratorSettings settings, Rope&
 
 TwistJob::TwistJob(const TwistJobSpec& spec, IntegratorSettings settings)
     : sys_(build_system(spec, settings, rope_)) {
-  protocol_ = std::make_shared<TwistProtocol>(spec.loading, rope_.grip_a, rope_.grip_b);
+  protocol_ =
+      std::make_shared<TwistProtocol>(spec.loading, sys_.elements().group_indices(kRopeGripA),
+                                      sys_.elements().group_indices(kRopeGripB));
   shift_ = std::make_shared<ShiftAngleSampler>(sys_.elements(), rope_);
   peaks_ = std::make_shared<Peaks>();
   SystemStage::Settings stage;
@@ -74,8 +76,9 @@ TwistReport TwistJob::report() {
   const RopeShape shape = rope_shape(el, rope_, axis);
   TwistReport r;
   r.applied_torque_nNnm = units::to_nNnm(protocol_->torque_at(sys_.time()));
-  r.grip_reaction_nNnm = units::to_nNnm(0.5 * (grip_reaction_moment(el, rope_.grip_a, axis.dir) -
-                                               grip_reaction_moment(el, rope_.grip_b, axis.dir)));
+  r.grip_reaction_nNnm =
+      units::to_nNnm(0.5 * (grip_reaction_moment(el, el.group_indices(kRopeGripA), axis.dir) -
+                            grip_reaction_moment(el, el.group_indices(kRopeGripB), axis.dir)));
   r.twist_angle_deg = shape.twist_angle_deg;
   r.shift_angle_deg = shift_angle * 180.0 / std::numbers::pi;
   r.rope_radius_nm = shape.radius;

@@ -86,8 +86,9 @@ int contact_clusters(const Elements& el, const Rope& rope, double reach) {
 
 }  // namespace
 
-RopeAxis rope_axis(const Elements& el, const Rope& rope) {
-  const Vec3 a = mass_centroid(el, rope.grip_a), b = mass_centroid(el, rope.grip_b);
+RopeAxis rope_axis(const Elements& el, const Rope&) {
+  const Vec3 a = mass_centroid(el, el.group_indices(kRopeGripA)),
+             b = mass_centroid(el, el.group_indices(kRopeGripB));
   RopeAxis ax;
   ax.origin = 0.5 * (a + b);
   ax.length = (b - a).norm();
@@ -220,11 +221,13 @@ Morphology classify_morphology(const RopeShape& shape, const Rope& rope) {
   return Morphology::Straight;
 }
 
-ShiftAngle::ShiftAngle(const Elements& ref, const Rope& rope) : rope_(&rope) {
+ShiftAngle::ShiftAngle(const Elements& ref, const Rope&) {
   const Vec3 z = Vec3::UnitZ();
-  const Vec3 ca = mass_centroid(ref, rope.grip_a), cb = mass_centroid(ref, rope.grip_b);
-  for (std::size_t i : rope.grip_a) ref_a_.push_back(perpendicular(ref.x[i] - ca, z));
-  for (std::size_t i : rope.grip_b) ref_b_.push_back(perpendicular(ref.x[i] - cb, z));
+  const std::vector<std::size_t> a = ref.group_indices(kRopeGripA),
+                                 b = ref.group_indices(kRopeGripB);
+  const Vec3 ca = mass_centroid(ref, a), cb = mass_centroid(ref, b);
+  for (std::size_t i : a) ref_a_.push_back(perpendicular(ref.x[i] - ca, z));
+  for (std::size_t i : b) ref_b_.push_back(perpendicular(ref.x[i] - cb, z));
 }
 
 double ShiftAngle::grip_rotation(const Elements& el, const std::vector<std::size_t>& grip,
@@ -240,8 +243,8 @@ double ShiftAngle::grip_rotation(const Elements& el, const std::vector<std::size
 }
 
 double ShiftAngle::update(const Elements& el, const RopeAxis& axis) {
-  const double rel = grip_rotation(el, rope_->grip_b, ref_b_, axis) -
-                     grip_rotation(el, rope_->grip_a, ref_a_, axis);
+  const double rel = grip_rotation(el, el.group_indices(kRopeGripB), ref_b_, axis) -
+                     grip_rotation(el, el.group_indices(kRopeGripA), ref_a_, axis);
   angle_ += std::remainder(rel - angle_, 2.0 * std::numbers::pi);
   return angle_;
 }

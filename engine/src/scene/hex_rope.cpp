@@ -134,6 +134,7 @@ Rope build_hex_rope(Elements& el, ParallelBond* bonds, const RopeSpec& spec) {
   const BondStiffness k = cnt_bond_stiffness();
   rope.site_elements.assign(n, std::vector<long>(S, -1));
   int tube_id = 0;
+  std::vector<std::uint64_t> grip_a, grip_b;  // tags
   for (int s = 0; s < n; ++s) {
     const Vec2 p = rope.lattice.sites[s];
     RopeTube* tube = nullptr;
@@ -153,12 +154,14 @@ Rope build_hex_rope(Elements& el, ParallelBond* bonds, const RopeSpec& spec) {
                              static_cast<std::uint32_t>(e), k));
       tube->elements.push_back(e);
       rope.site_elements[s][i] = static_cast<long>(e);
-      if (i < spec.grip_segments) rope.grip_a.push_back(e);
-      if (i >= S - spec.grip_segments) rope.grip_b.push_back(e);
+      if (i < spec.grip_segments) grip_a.push_back(el.tag[e]);
+      if (i >= S - spec.grip_segments) grip_b.push_back(el.tag[e]);
     }
   }
   require(!rope.tubes.empty(), "the defects leave no tube in the rope");
-  require(!rope.grip_a.empty() && !rope.grip_b.empty(), "the defects leave a grip without tubes");
+  require(!grip_a.empty() && !grip_b.empty(), "the defects leave a grip without tubes");
+  el.groups.add(std::string(kRopeGripA), std::move(grip_a));
+  el.groups.add(std::string(kRopeGripB), std::move(grip_b));
 
   // Internal sites: a tube at mid-length and six lattice neighbours with tubes there too.
   const int mid = S / 2;

@@ -10,6 +10,7 @@
 // their reactions along z, compression positive. Slip (Eq. 40) is against the positions at the
 // start of loading and, as Eq. 40 is written, also counts a rigid turn of the whole particle.
 #include <memory>
+#include <string_view>
 #include <vector>
 
 #include "mdem/force/bond/grain_bond.h"
@@ -20,6 +21,11 @@
 namespace mdem {
 
 class PackingStage;
+
+// The platens, declared as element groups of the job's system: each on its own, and both.
+inline constexpr std::string_view kTopPlaten = "compression.top_platen";
+inline constexpr std::string_view kBottomPlaten = "compression.bottom_platen";
+inline constexpr std::string_view kPlatens = "compression.platens";
 
 struct CompressionJobSpec {
   PackingSpec particle;

@@ -14,7 +14,8 @@ namespace mdem {
 class StateWriter;
 class StateReader;
 
-// The rope's axis: through the mass centroids of the two grips, from grip a to grip b.
+// The rope's axis: through the mass centroids of the two grips (el's groups kRopeGripA and
+// kRopeGripB), from grip a to grip b.
 struct RopeAxis {
   Vec3 origin = Vec3::Zero();  // midpoint of the two grip centroids
   Vec3 dir = Vec3::UnitZ();
@@ -72,7 +73,6 @@ class ShiftAngle {
  private:
   double grip_rotation(const Elements& el, const std::vector<std::size_t>& grip,
                        const std::vector<Vec3>& ref, const RopeAxis& axis) const;
-  const Rope* rope_;
   std::vector<Vec3> ref_a_, ref_b_;  // offsets from each grip's centroid, as built
   double angle_ = 0;
 };

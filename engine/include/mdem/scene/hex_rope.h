@@ -5,6 +5,7 @@
 // end segments of every tube at each end). The rope axis is z, centred on the origin.
 #include <Eigen/Core>
 #include <cstddef>
+#include <string_view>
 #include <vector>
 
 #include "mdem/core/elements.h"
@@ -70,7 +71,6 @@ struct Rope {
   std::vector<RopeTube> tubes;
   // Per site, the elements at each segment index (−1 where a defect removed it).
   std::vector<std::vector<long>> site_elements;
-  std::vector<std::size_t> grip_a, grip_b;  // z < 0 end and z > 0 end
   // Sites that hold a tube at mid-length and have all six lattice neighbours there, as built: the
   // "internal" tubes of the topological charge (thesis §4.2).
   std::vector<bool> internal;
@@ -79,7 +79,13 @@ struct Rope {
   double initial_radius = 0;  // largest distance of a tube centre from the axis (nm)
 };
 
-// Appends the rope's elements (and its bonds, when bonds is not null) to el. Throws
+// The rope's grips, declared as element groups (Elements::groups): the grip_segments end
+// segments of every tube at the z < 0 end (a) and at the z > 0 end (b).
+inline constexpr std::string_view kRopeGripA = "rope.grip_a";
+inline constexpr std::string_view kRopeGripB = "rope.grip_b";
+
+// Appends the rope's elements (and its bonds, when bonds is not null) to el, and declares the
+// groups kRopeGripA and kRopeGripB. Throws
 // std::invalid_argument naming the field for layers outside [1, 50], segments < 2, a missing or
 // defect site that does not exist, grip_segments outside [1, segments/2], or a spec that leaves
 // no tube.
