@@ -395,16 +395,16 @@ JobRecord read_job(const Query& q) {
 // machine went down) is shown INTERRUPTED. Its state is read again once the process is known to
 // be gone, so a job that finished meanwhile shows as it finished.
 void show_interrupted(Impl& db, JobRecord& job) {
-  if (job.state != "RUNNING" || !job.server.empty() || job.runner.empty() ||
-      !runner_gone(job.runner))
+  const std::string running = job_state_name(v1::RUNNING);
+  if (job.state != running || !job.server.empty() || job.runner.empty() || !runner_gone(job.runner))
     return;
   Query q(db, "SELECT state, reason FROM jobs WHERE id = ?", "cannot read the jobs");
   q.bind(1, job.id);
   if (!q.step()) return;
   job.state = q.text(0);
   job.reason = q.text(1);
-  if (job.state != "RUNNING") return;
-  job.state = "INTERRUPTED";
+  if (job.state != running) return;
+  job.state = job_state_name(v1::INTERRUPTED);
   job.reason = "the process running it (" + runner_text(job.runner) +
                ") ended without finishing it (killed?); what it stored is kept";
 }
@@ -519,9 +519,11 @@ void bind_snapshot(Query& q, const Snapshot& s) {
 }
 
 void check_state(const Impl& db, const std::string& id, const std::string& state) {
-  if (!parse_job_state(state))
-    throw StoreError(db.where() + ": job '" + id + "': unknown state '" + state +
-                     "' (allowed: " + job_state_names() + ")");
+  const std::optional<JobState> s = parse_job_state(state);
+  if (!s || !is_stored(*s))
+    throw StoreError(db.where() + ": job '" + id + "': " +
+                     (s ? "state '" + state + "' is shown, never stored"
+                        : "unknown state '" + state + "' (allowed: " + job_state_names() + ")"));
 }
 
 // The writes below run inside the caller's transaction.
@@ -639,7 +641,8 @@ void ResultsStore::create_job(const JobRecord& job) {
   if (job.id.empty()) throw StoreError(impl_->where() + ": a job needs an id");
   check_state(*impl_, job.id, job.state);
   impl_->call([&](StoreDb& db) {
-    const bool own = job.state == "RUNNING" && job.server.empty() && !db.missing.count("runner");
+    const bool own = job.state == job_state_name(v1::RUNNING) && job.server.empty() &&
+                     !db.missing.count("runner");
     Query q(db,
             std::string("INSERT INTO jobs (") + kFirstJobColumns + (own ? ", runner" : "") +
                 ") VALUES (?, ?, ?, ?, ?, ?, ?, ?" + (own ? ", ?" : "") + ")",

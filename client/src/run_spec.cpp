@@ -60,7 +60,7 @@ int execute(const SpecKind& kind, const Parsed& p, std::ostream& out, std::ostre
   JobRunner runner(p.spec);
   Job& job = runner.job();
   // A time step above the safe limit is refused here, before anything is stored.
-  job.system().initialize();
+  check_time_step(job);
   // From before the record exists: SIGINT, SIGTERM or SIGHUP stop the job as cancelled.
   InterruptGuard interrupt;
   ResultsStore store(p.db);

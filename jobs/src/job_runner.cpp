@@ -4,6 +4,15 @@
 
 namespace mdem {
 
+void check_time_step(Job& job) {
+  if (!job.system().initialized()) job.system().initialize();
+}
+
+bool scene_built(const Job& job) {
+  const Stage* st = job.current_stage();
+  return !st || st->reports();
+}
+
 long steps_needed(Job& job) {
   return std::max(1L, static_cast<long>(std::ceil(job.duration() / job.system().dt() - 1e-9)));
 }
@@ -26,6 +35,12 @@ JobOutcome JobRunner::run(const JobObserver& observer,
   } catch (const NumericalError& e) {
     o.state = v1::FAILED;
     o.reason = e.what();
+    o.steps = job_->system().steps();
+  } catch (const ConfigError& e) {
+    // A setting refused only once a stage has built its system (a compression job's time step
+    // is checked after its particle is packed): the job is invalid, results so far kept.
+    o.state = v1::FAILED;
+    o.reason = std::string("invalid job: ") + e.what();
     o.steps = job_->system().steps();
   }
   o.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -3,7 +3,8 @@
 namespace mdem {
 
 namespace {
-constexpr JobState kStates[] = {v1::QUEUED, v1::RUNNING, v1::SUCCEEDED, v1::FAILED, v1::CANCELLED};
+constexpr JobState kStates[] = {v1::QUEUED, v1::RUNNING,   v1::SUCCEEDED,
+                                v1::FAILED, v1::CANCELLED, v1::INTERRUPTED};
 }  // namespace
 
 std::string job_state_name(JobState s) {
@@ -15,6 +16,8 @@ std::optional<JobState> parse_job_state(std::string_view name) {
     if (job_state_name(s) == name) return s;
   return std::nullopt;
 }
+
+bool is_stored(JobState s) { return s != v1::JOB_STATE_UNSPECIFIED && s != v1::INTERRUPTED; }
 
 bool is_final(JobState s) { return s == v1::SUCCEEDED || s == v1::FAILED || s == v1::CANCELLED; }
 

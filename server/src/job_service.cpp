@@ -111,7 +111,7 @@ Status JobServiceImpl::SubmitJob(grpc::ServerContext* ctx, const v1::SubmitJobRe
     long elements = bound, total_steps = 0;
     if (builds_quickly(spec)) try {
         std::unique_ptr<Job> job = make_spec_job(spec, 1);
-        job->system().initialize();  // refuses a time step above the safe limit
+        check_time_step(*job);  // refuses a time step above the safe limit
         elements = static_cast<long>(job->system().elements().size());
         total_steps = steps_needed(*job);
       } catch (const std::invalid_argument& e) {  // ConfigError included

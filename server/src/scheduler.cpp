@@ -140,7 +140,8 @@ void Scheduler::dispatch() {
 }
 
 void Scheduler::check_steps(Job& job) const {
-  job.system().initialize();
+  check_time_step(job);
+  if (!scene_built(job)) return;  // checked again once the scene is built (run's progress)
   const long steps = steps_needed(job);
   if (steps > config_.max_steps)
     throw std::invalid_argument("the job needs " + std::to_string(steps) +
@@ -161,8 +162,16 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
   std::string reason;
   try {
     job = &runner.emplace(row.spec, row.threads).job();
-    if (row.total_steps <= 0 && row.checkpoint_step == 0) check_steps(*job);
-    if (row.checkpoint_step > 0) try {
+    // A checkpoint taken while a scene-building stage ran (a compression job's packing) is at
+    // time-series step 0: the file, not the step, says whether there is one to resume from.
+    std::error_code ec;
+    const bool resume = row.checkpoint_step > 0 || std::filesystem::is_regular_file(ckpt, ec);
+    bool steps_checked = row.total_steps > 0 || resume;
+    if (!steps_checked) {
+      check_steps(*job);
+      steps_checked = scene_built(*job);
+    }
+    if (resume) try {
         const CheckpointData data = read_checkpoint(ckpt);
         load_checkpoint(*job, data.state);
       } catch (const std::exception& e) {
@@ -200,6 +209,12 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
       ch->push_droppable(snapshot_events(s), s.step, true);
     };
     obs.progress = [&](const JobProgress& p) {
+      // A job whose scene a stage builds (a compression job's packing) knows its step count
+      // once that stage is done: refused then, as invalid, when it needs more than max_steps.
+      if (!steps_checked && scene_built(*job)) {
+        steps_checked = true;
+        check_steps(*job);
+      }
       if (p.step <= row.last_progress_step) return;
       v1::JobEvent e;
       e.mutable_progress()->set_step(p.step);

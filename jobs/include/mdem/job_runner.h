@@ -9,12 +9,23 @@
 #include <string>
 
 #include "mdem/job/job.h"
+#include "mdem/job/stage.h"
 #include "mdem/job_kinds.h"
 #include "mdem/job_state.h"
 #include "mdem/spec_job.h"
 #include "mdem/v1/job.pb.h"
 
 namespace mdem {
+
+// Initializes the job's system, so that a time step above the safe limit is refused (ConfigError)
+// before anything is stored. A system that a scene-building stage set up and initialized itself
+// (a compression job's packing, whose grains start shrunk) is left alone: initializing it again
+// would take its step from the shrunk grains and spoil the packing.
+void check_time_step(Job& job);
+
+// Whether the job's own system exists: no scene-building stage is still to run (its step count
+// and time step are those of the job, not of a packing).
+bool scene_built(const Job& job);
 
 // Steps a job needs: ceil(duration / dt), at least 1 (the system must be initialized).
 long steps_needed(Job& job);
@@ -39,8 +50,9 @@ class JobRunner {
   const v1::JobSpec& spec() const { return spec_; }
 
   // run_job at the spec's cadence. A run the observer cancels is CANCELLED with the reason
-  // cancel_reason(job) gives; a NumericalError is FAILED with its message; other exceptions
-  // propagate (the caller knows what they mean).
+  // cancel_reason(job) gives; a NumericalError or a ConfigError (a setting refused once a stage
+  // built its system) is FAILED with its message; other exceptions propagate (the caller knows what
+  // they mean).
   JobOutcome run(const JobObserver& observer,
                  const std::function<std::string(Job&)>& cancel_reason);
 
