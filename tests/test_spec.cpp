@@ -375,6 +375,17 @@ TEST(SpecTwist, MissingTubesListedTwiceAreRefused) {
   EXPECT_NE(errors[1].message.find("site 7 is listed 3 times"), std::string::npos);
 }
 
+// A huge list of line defects (2 000 000 entries parsed in seconds) is one error naming the
+// field and the limit, not a rope the engine is asked to build.
+TEST(SpecTwist, HugeLineDefectListIsOneError) {
+  JobSpec spec = mdem::spec::finalize(mdem::spec::parse_json(R"({"twist":{}})"));
+  for (int i = 0; i < 200000; ++i) spec.mutable_twist()->add_line_defects()->set_width(1);
+  expect_one_error(mdem::spec::validate(spec), "twist.line_defects",
+                   {"200000 line defects", "at most 64"});
+  spec.mutable_twist()->mutable_line_defects()->DeleteSubrange(64, 200000 - 64);
+  EXPECT_TRUE(mdem::spec::validate(spec).empty());
+}
+
 TEST(SpecTwist, SiteRangeFollowsLayers) {
   expect_one_error(json_errors(R"({"twist":{"layers":3, "missing_tubes":[19]}})"),
                    "twist.missing_tubes[0]", {"site 19 does not exist", "0..18 for 3 layers"});

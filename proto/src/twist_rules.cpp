@@ -164,8 +164,17 @@ void check_damping(const mdem::v1::TwistSpec& t, Report& rep) {
 void check_twist(const mdem::v1::TwistSpec& t, Report& rep) {
   check_rope(t, rep);
   check_missing_tubes(t, rep);
-  for (int i = 0; i < t.line_defects_size(); ++i)
-    check_line_defect(t.line_defects(i), "twist.line_defects[" + std::to_string(i) + "]", rep);
+  // Each line defect removes a row of tubes from the centre outwards: a few dozen directions
+  // already remove every tube of the largest rope, so a longer list is a mistake (and one error,
+  // not one per entry, however long it is).
+  constexpr int kMaxLineDefects = 64;
+  if (t.line_defects_size() > kMaxLineDefects)
+    rep.add("twist.line_defects", std::to_string(t.line_defects_size()) +
+                                      " line defects listed (allowed: at most " +
+                                      std::to_string(kMaxLineDefects) + ")");
+  else
+    for (int i = 0; i < t.line_defects_size(); ++i)
+      check_line_defect(t.line_defects(i), "twist.line_defects[" + std::to_string(i) + "]", rep);
   check_loading(t, rep);
   check_grip_segments(t, rep);
   check_damping(t, rep);
