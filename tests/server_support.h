@@ -1,7 +1,9 @@
 #pragma once
 // What the daemon's tests share beyond the process harness: a small twist job, waiting on a
 // job's state, and reading its event log.
+#include <cstring>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <vector>
 
 #include "daemon.h"
@@ -91,6 +93,24 @@ inline fs::path kill_after_checkpoint(DaemonProcess& d, const std::string& id) {
   const fs::path ckpt = d.data_dir() / "checkpoints" / (id + ".ckpt");
   EXPECT_TRUE(fs::exists(ckpt)) << ckpt;
   return ckpt;
+}
+
+// step -> the concatenated bytes of that snapshot.
+inline std::map<long, std::string> snapshots_by_step(const std::vector<JobEvent>& ev) {
+  std::map<long, std::string> m;
+  for (const JobEvent& e : of_kind(ev, JobEvent::kSnapshot))
+    m[e.snapshot().step()] += e.snapshot().data();
+  return m;
+}
+
+inline nlohmann::json report_of(const std::vector<JobEvent>& ev) {
+  const auto r = of_kind(ev, JobEvent::kReport);
+  if (r.empty()) return {};
+  return nlohmann::json::parse(r.back().report().json());
+}
+
+inline bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
 }
 
 // The daemon's grpc.health.v1 status (UNKNOWN when the call fails).

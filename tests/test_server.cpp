@@ -23,24 +23,6 @@ using mdem::v1::JobSpec;
 using mdem::v1::JobState;
 using Clock = std::chrono::steady_clock;
 
-// step -> the concatenated bytes of that snapshot.
-std::map<long, std::string> snapshots_by_step(const std::vector<JobEvent>& ev) {
-  std::map<long, std::string> m;
-  for (const JobEvent& e : of_kind(ev, JobEvent::kSnapshot))
-    m[e.snapshot().step()] += e.snapshot().data();
-  return m;
-}
-
-nlohmann::json report_of(const std::vector<JobEvent>& ev) {
-  const auto r = of_kind(ev, JobEvent::kReport);
-  if (r.empty()) return {};
-  return nlohmann::json::parse(r.back().report().json());
-}
-
-bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
-}
-
 TEST(Server, SubmitWatchSucceedsWithResults) {
   DaemonProcess d(fresh_dir("basic"));
   const std::string id = submit_ok(d, kAliceToken, "r1", small_spec(20, 5));

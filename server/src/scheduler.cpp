@@ -191,9 +191,11 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
       ch->flush();  // the log reaches at least `step` before the checkpoint claims it
       const double wall = wall_before + seconds_since(t0);
       write_checkpoint(ckpt, {step, save_checkpoint(*job)});
-      store_.set_checkpoint(row.id, step, wall);
+      // The store counts steps over all stages, as progress does: a checkpoint taken while a
+      // scene-building stage runs (time-series step 0) still reads as one to resume from.
+      store_.set_checkpoint(row.id, job->overall_step(), wall);
       last_ckpt = Clock::now();
-      return step;
+      return job->overall_step();
     };
     JobObserver obs;
     obs.frame = [&](const SeriesFrame& f) {

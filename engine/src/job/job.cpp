@@ -46,6 +46,11 @@ Stage& Job::add_stage(std::unique_ptr<Stage> stage) {
 
 void Job::add_state(std::shared_ptr<Stateful> part) { parts_.push_back(std::move(part)); }
 
+long Job::overall_step() const {
+  const Stage* st = current_stage();
+  return finished_steps_ + (st ? st->steps_done() : 0);
+}
+
 void Job::begin_stage() {
   Stage* st = current_stage();
   if (!st || begun_) return;
@@ -185,7 +190,7 @@ JobRunResult run_job(Job& job, const JobCadence& cadence, const JobObserver& obs
       const long k = step - start, k0 = before - start;
       if (obs.progress && (k / progress_every > k0 / progress_every || k == 0 || end)) {
         JobProgress p;
-        p.step = job.finished_steps() + st->steps_done();
+        p.step = job.overall_step();
         p.total_steps = std::max(p.step, planned_from(job));
         p.time_ps = sys.time();
         p.phase = st->phase();

@@ -53,6 +53,9 @@ class Job {
   std::size_t stage_index() const { return index_; }
   bool stage_begun() const { return begun_; }
   long finished_steps() const { return finished_steps_; }
+  // Steps run over all stages so far (what progress reports count): finished stages' steps plus
+  // the current stage's.
+  long overall_step() const;
   Stage* current_stage() const { return index_ < stages_.size() ? stages_[index_].get() : nullptr; }
 
   // Checkpoints: the stage index, what the finished stages handed on, the current stage's state

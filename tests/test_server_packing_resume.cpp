@@ -1,0 +1,71 @@
+// kill -9 while a compression job packs its particle (a stage of its own, at time-series step 0):
+// the daemon resumes from the checkpoint taken during the packing, and the job ends with the
+// frames and report of an uninterrupted run, bit for bit.
+#include <gtest/gtest.h>
+
+#include "server_support.h"
+
+namespace {
+
+using namespace mdem::testing;
+using mdem::v1::JobEvent;
+using mdem::v1::JobInfo;
+using mdem::v1::JobSpec;
+
+// An Au sphere of R = 14 nm (about 470 grains; its packing takes a few seconds on one thread),
+// crushed by 1 nm quickly.
+JobSpec packing_spec() {
+  JobSpec s;
+  s.set_seed(5);
+  s.mutable_run()->set_threads(1);
+  s.mutable_outputs()->set_snapshot_every_ps(0);
+  auto* c = s.mutable_compression();
+  c->set_outer_radius_nm(14);
+  c->set_peak_displacement_nm(1);
+  c->set_platen_speed_nm_per_ps(0.1);
+  return s;
+}
+
+TEST(ServerPacking, KillDashNineWhilePackingResumesToIdenticalResults) {
+  DaemonProcess d(fresh_dir("kill9-packing"), {"--checkpoint-every", "0.2"});
+  const std::string ref = submit_ok(d, kAliceToken, "reference", packing_spec());
+  const JobInfo ref_info = wait_finished(d, ref, 300);
+  ASSERT_EQ(ref_info.state(), mdem::v1::SUCCEEDED) << ref_info.reason();
+  const auto ref_ev = watch(d, kAliceToken, ref, 1);
+
+  const std::string id = submit_ok(d, kAliceToken, "victim", packing_spec());
+  const fs::path ckpt = d.data_dir() / "checkpoints" / (id + ".ckpt");
+  // Killed as soon as the first checkpoint exists: still packing (no frame logged yet).
+  const JobInfo before = wait_for(
+      d, id, [&](const JobInfo&) { return fs::exists(ckpt); }, 120);
+  d.kill9();
+  d.start();
+  const JobInfo after = wait_finished(d, id, 300);
+  EXPECT_EQ(after.state(), mdem::v1::SUCCEEDED) << after.reason();
+  EXPECT_GE(after.resumes(), 1);
+  const auto ev = watch(d, kAliceToken, id, 1);
+  expect_contiguous(ev);
+  // Resumed from a checkpoint before the compression's first frame was logged: while packing.
+  long resumed_at = -1, first_frame = -1;
+  for (std::size_t k = 0; k < ev.size(); ++k) {
+    if (resumed_at < 0 && ev[k].has_state() &&
+        ev[k].state().reason().find("resumed from the checkpoint at step") != std::string::npos)
+      resumed_at = static_cast<long>(k);
+    if (first_frame < 0 && ev[k].has_frame()) first_frame = static_cast<long>(k);
+  }
+  ASSERT_GE(resumed_at, 0) << "not resumed from a checkpoint (killed at progress step "
+                           << before.step() << ")";
+  EXPECT_LT(resumed_at, first_frame) << "the kill came after the packing";
+
+  const auto f_ref = frames_by_step(ref_ev), f = frames_by_step(ev);
+  ASSERT_EQ(f.size(), f_ref.size());
+  for (const auto& [step, v] : f_ref) {
+    ASSERT_TRUE(f.count(step)) << "frame at step " << step << " missing";
+    EXPECT_TRUE(same_bits(v, f.at(step))) << "frame at step " << step << " differs";
+  }
+  const auto r_ref = report_of(ref_ev), r = report_of(ev);
+  EXPECT_EQ(r["summary"], r_ref["summary"]);
+  EXPECT_EQ(r["accuracy"], r_ref["accuracy"]);
+}
+
+}  // namespace
