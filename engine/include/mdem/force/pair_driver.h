@@ -59,8 +59,12 @@ inline Vec3 displacement(const Domain& domain, const Vec3& xi, const Vec3& xj) {
     return xj - xi;
 }
 
+// flatten: the kernel's pair() inlines into the loop (GCC would otherwise call it per pair and
+// pass the result through memory: 8 % more instructions on the twisted rope than the old
+// hand-written loops; flattened, 3.5 % fewer).
 template <bool kPeriodic, bool kFilter, class K>
-void run(const K& k, const Elements& el, const NeighborList& list, ForceSink& sink, bool threaded) {
+[[gnu::flatten]] void run(const K& k, const Elements& el, const NeighborList& list, ForceSink& sink,
+                          bool threaded) {
   const auto& off = list.offsets();
   const auto& nb = list.neighbors();
   const Domain& domain = list.domain();
