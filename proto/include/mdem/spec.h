@@ -49,15 +49,19 @@ std::vector<FieldError> validate(const mdem::v1::JobSpec& spec);
 // apply_defaults, then validate; throws SpecError listing all errors.
 mdem::v1::JobSpec finalize(mdem::v1::JobSpec spec);
 
-// Protobuf JSON mapping, unknown fields refused. Throws SpecError (field "json") carrying
-// protobuf's parser message, which names the offending field. Does not apply defaults.
+// Protobuf JSON mapping, read as written first: an unknown field, a field given twice (at any
+// depth, in either spelling), a value of the wrong kind, a number out of its type's range, a null
+// in a list or nesting deeper than 32 is refused. Throws SpecError (field "json") whose message
+// names the field path the user wrote, its line:column and what is allowed. Does not apply
+// defaults.
 mdem::v1::JobSpec parse_json(std::string_view text);
 
 // YAML -> JSON text -> the JSON mapping. Plain scalars: null/~ -> null, true/false -> bool,
 // numbers -> numbers, .nan/.inf/-.inf -> "NaN"/"Infinity"/"-Infinity", anything else (and every
 // scalar of a string field, so `name: 2024` is a name) -> string; quoted scalars stay strings.
-// Throws SpecError (field "yaml") with line and column for a syntax error, a duplicate key or a
-// document that is not one mapping. Does not apply defaults.
+// Throws SpecError (field "yaml") with line and column for a syntax error or a document that is
+// not one mapping, and for everything parse_json refuses (located in the YAML text). Does not
+// apply defaults.
 mdem::v1::JobSpec parse_yaml(std::string_view text);
 
 // Reads a .json, .yaml or .yml file (by extension, case-insensitive) and parses it. Throws
