@@ -113,6 +113,20 @@ inline bool same_bits(const std::vector<double>& a, const std::vector<double>& b
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
 }
 
+// A resumed job's frames (every step, bit for bit), summary and accuracy equal its reference's.
+inline void expect_same_results(const std::vector<JobEvent>& ev,
+                                const std::vector<JobEvent>& ref_ev) {
+  const auto f_ref = frames_by_step(ref_ev), f = frames_by_step(ev);
+  ASSERT_EQ(f.size(), f_ref.size());
+  for (const auto& [step, v] : f_ref) {
+    ASSERT_TRUE(f.count(step)) << "frame at step " << step << " missing";
+    EXPECT_TRUE(same_bits(v, f.at(step))) << "frame at step " << step << " differs";
+  }
+  const auto r_ref = report_of(ref_ev), r = report_of(ev);
+  EXPECT_EQ(r["summary"], r_ref["summary"]);
+  EXPECT_EQ(r["accuracy"], r_ref["accuracy"]);
+}
+
 // The daemon's grpc.health.v1 status (UNKNOWN when the call fails).
 inline grpc::health::v1::HealthCheckResponse::ServingStatus health(const DaemonProcess& d) {
   auto stub = grpc::health::v1::Health::NewStub(d.channel());

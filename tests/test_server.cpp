@@ -299,17 +299,9 @@ TEST(Server, KillDashNineResumesToIdenticalResults) {
               e.state().reason().find("resumed from the checkpoint at step") != std::string::npos;
   EXPECT_TRUE(resumed) << "no resume from a checkpoint (killed at step " << before.step() << ")";
 
-  const auto f_ref = frames_by_step(ref_ev), f = frames_by_step(ev);
-  ASSERT_EQ(f.size(), f_ref.size());
-  for (const auto& [step, v] : f_ref) {
-    ASSERT_TRUE(f.count(step)) << "frame at step " << step << " missing";
-    EXPECT_TRUE(same_bits(v, f.at(step))) << "frame at step " << step << " differs";
-  }
+  expect_same_results(ev, ref_ev);
   EXPECT_EQ(snapshots_by_step(ev), snapshots_by_step(ref_ev));
-  const auto r_ref = report_of(ref_ev), r = report_of(ev);
-  EXPECT_EQ(r["summary"], r_ref["summary"]);
-  EXPECT_EQ(r["accuracy"], r_ref["accuracy"]);
-  EXPECT_EQ(r["performance"]["steps"], r_ref["performance"]["steps"]);
+  EXPECT_EQ(report_of(ev)["performance"]["steps"], report_of(ref_ev)["performance"]["steps"]);
 }
 
 // SIGTERM drains: the running job checkpoints and is requeued, the daemon exits 0, and after a

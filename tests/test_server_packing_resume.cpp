@@ -57,15 +57,7 @@ TEST(ServerPacking, KillDashNineWhilePackingResumesToIdenticalResults) {
                            << before.step() << ")";
   EXPECT_LT(resumed_at, first_frame) << "the kill came after the packing";
 
-  const auto f_ref = frames_by_step(ref_ev), f = frames_by_step(ev);
-  ASSERT_EQ(f.size(), f_ref.size());
-  for (const auto& [step, v] : f_ref) {
-    ASSERT_TRUE(f.count(step)) << "frame at step " << step << " missing";
-    EXPECT_TRUE(same_bits(v, f.at(step))) << "frame at step " << step << " differs";
-  }
-  const auto r_ref = report_of(ref_ev), r = report_of(ev);
-  EXPECT_EQ(r["summary"], r_ref["summary"]);
-  EXPECT_EQ(r["accuracy"], r_ref["accuracy"]);
+  expect_same_results(ev, ref_ev);
 }
 
 }  // namespace

@@ -162,10 +162,9 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
   std::string reason;
   try {
     job = &runner.emplace(row.spec, row.threads).job();
-    // A checkpoint taken while a scene-building stage ran (a compression job's packing) is at
-    // time-series step 0: the file, not the step, says whether there is one to resume from.
-    std::error_code ec;
-    const bool resume = row.checkpoint_step > 0 || std::filesystem::is_regular_file(ckpt, ec);
+    // The store's checkpoint step counts over all stages (Job::overall_step), so a checkpoint
+    // taken while a scene-building stage ran (a compression job's packing) counts too.
+    const bool resume = row.checkpoint_step > 0;
     bool steps_checked = row.total_steps > 0 || resume;
     if (!steps_checked) {
       check_steps(*job);
