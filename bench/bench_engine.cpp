@@ -29,7 +29,8 @@ struct Scene {
 // (a) Seven 100-segment tubes, 1.7 nm apart (about the vdW equilibrium spacing): 700 segments.
 Scene bundle_scene() {
   Scene s;
-  add_seven_tube_bundle(s.el, s.bonds.get(), 100, 1.7);
+  add_seven_tube_bundle(s.el, 100, 1.7);
+  s.bonds = ParallelBond::from_topology(s.el, BondType::Cnt, cnt_bond_stiffness());
   return s;
 }
 
@@ -46,11 +47,15 @@ FilmSpec film_spec() {
   return f;
 }
 
-Scene film_scene() {
+// Every film of these benchmarks is built here, with the project's own generator.
+Scene make_film(const FilmSpec& spec) {
   Scene s;
-  add_random_film(s.el, s.bonds.get(), film_spec());
+  add_random_film(s.el, spec);
+  s.bonds = ParallelBond::from_topology(s.el, BondType::Cnt, cnt_bond_stiffness());
   return s;
 }
+
+Scene film_scene() { return make_film(film_spec()); }
 
 // The generated film has tubes crossing through each other. A short damped pre-relaxation
 // (PFC local damping) pushes the worst overlaps apart so the timed run starts from a state a
@@ -123,6 +128,144 @@ BENCHMARK(BM_FilmSteps)
     ->Arg(2)
     ->UseRealTime()
     ->Iterations(4)  // 40 steps: several neighbour-list rebuilds per measurement
+    ->Unit(benchmark::kMillisecond);
+
+// Issue 13's films, the peer code's (waLBerla mesa_pd) CNT film set-up reproduced with our
+// generator: 396 tubes × 148 segments = 58 608 segments, relaxed 500 steps at dt 20 fs under local
+// damping 0.2 (no dashpots).
+//   dense:  300 × 300 × 20 nm, at most 2° out of plane (≈ 6.8 vdW pairs per segment once relaxed);
+//   sparse: 500 × 500 × 70 nm, at most 26° out of plane (≈ 0.85 pairs per segment).
+FilmSpec issue13_film(bool dense) {
+  FilmSpec f;
+  f.side = dense ? 300 : 500;
+  f.thickness = dense ? 20 : 70;
+  f.max_out_of_plane_deg = dense ? 2 : 26;
+  f.tubes = 396;
+  f.segments_per_tube = 148;
+  f.seed = 13;
+  return f;
+}
+constexpr double kIssue13Dt = 0.020;  // ps
+
+// A film system at dt 20 fs, or at our safe step when that is smaller (the generated film's
+// overlapping tubes sit on the stiff linear branch of the vdW law: its first safe step is ~5 fs).
+System issue13_system(Elements el, bool dense, int threads) {
+  IntegratorSettings set;
+  set.threads = threads;
+  set.local_damping = 0.2;
+  for (;;) {
+    System sys(el, set);
+    sys.add(std::move(make_film(issue13_film(dense)).bonds));
+    sys.add(std::make_unique<AnisotropicVdw>());
+    sys.initialize();
+    if (set.dt || sys.dt() < kIssue13Dt) return sys;
+    set.dt = kIssue13Dt;
+  }
+}
+
+// The relaxed film (velocities zeroed), once per process and film: 500 steps in chunks of 100,
+// the step re-chosen for each chunk.
+const Elements& relaxed_issue13_film(bool dense) {
+  auto relax = [](bool d) {
+    Elements el = make_film(issue13_film(d)).el;
+    for (int chunk = 0; chunk < 5; ++chunk) {
+      System sys = issue13_system(std::move(el), d, 0);
+      sys.run(100);
+      el = sys.elements();
+    }
+    for (std::size_t i = 0; i < el.size(); ++i) {
+      el.v[i].setZero();
+      el.w[i].setZero();
+    }
+    return el;
+  };
+  static const Elements dense_film = relax(true);
+  static const Elements sparse_film = relax(false);
+  return dense ? dense_film : sparse_film;
+}
+
+// Full steps at the films' own step (dt 20 fs when safe, local damping 0.2, as they were relaxed).
+void issue13_steps(benchmark::State& state, bool dense) {
+  const Elements& el = relaxed_issue13_film(dense);
+  System sys = issue13_system(el, dense, static_cast<int>(state.range(0)));
+  sys.run(10);  // warm-up
+  const long steps0 = sys.steps();
+  for (auto _ : state) sys.run(10);
+  const double steps = static_cast<double>(sys.steps() - steps0);
+  const double n = static_cast<double>(el.size());
+  state.counters["element_steps_per_s"] =
+      benchmark::Counter(n * steps, benchmark::Counter::kIsRate);
+  state.counters["elements"] = n;
+  state.counters["dt_fs"] = sys.dt() * 1e3;
+  state.counters["pairs_per_element"] = static_cast<double>(sys.neighbors()->pair_count()) / n;
+}
+void BM_DenseFilmSteps(benchmark::State& state) { issue13_steps(state, true); }
+void BM_SparseFilmSteps(benchmark::State& state) { issue13_steps(state, false); }
+BENCHMARK(BM_DenseFilmSteps)
+    ->ArgName("threads")
+    ->Arg(1)
+    ->Arg(2)
+    ->UseRealTime()
+    ->Iterations(4)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SparseFilmSteps)
+    ->ArgName("threads")
+    ->Arg(1)
+    ->Arg(2)
+    ->UseRealTime()
+    ->Iterations(6)
+    ->Unit(benchmark::kMillisecond);
+
+// The vdW pair model alone on a relaxed film: one force evaluation over its own neighbour list
+// (built for it, with its exclusion). ns_per_pair is per listed pair (within cutoff + skin);
+// ns_per_interacting_pair per pair within the cutoff (the others are rejected by distance).
+void issue13_vdw(benchmark::State& state, bool dense) {
+  const Elements& el = relaxed_issue13_film(dense);
+  const int threads = static_cast<int>(state.range(0));
+  const AnisotropicVdw vdw;
+  NeighborList nl(vdw.cutoff(), IntegratorSettings{}.skin);
+  nl.set_exclusion(
+      [&vdw](const Elements& e, std::size_t i, std::size_t j) { return vdw.excludes(e, i, j); });
+  nl.set_owner(&vdw);
+  nl.build(el);
+  std::size_t within = 0;
+  const double rc2 = vdw.cutoff() * vdw.cutoff();
+  for (std::size_t i = 0; i < el.size(); ++i)
+    for (std::uint32_t m = nl.offsets()[i]; m < nl.offsets()[i + 1]; ++m)
+      within += (el.x[nl.neighbors()[m]] - el.x[i]).squaredNorm() < rc2;
+  ForceSink sink;
+  sink.resize(el.size(), threads, false);
+  vdw.compute(el, &nl, sink);  // warm-up
+  for (auto _ : state) {
+    state.PauseTiming();
+    sink.clear();
+    state.ResumeTiming();
+    vdw.compute(el, &nl, sink);
+  }
+  const double evals = static_cast<double>(state.iterations());
+  const double n = static_cast<double>(el.size());
+  state.counters["ns_per_pair"] =
+      benchmark::Counter(static_cast<double>(nl.pair_count()) * evals * 1e-9,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["ns_per_interacting_pair"] =
+      benchmark::Counter(static_cast<double>(within) * evals * 1e-9,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["pairs_per_element"] = static_cast<double>(nl.pair_count()) / n;
+  state.counters["interacting_per_element"] = static_cast<double>(within) / n;
+}
+void BM_DenseFilmVdw(benchmark::State& state) { issue13_vdw(state, true); }
+void BM_SparseFilmVdw(benchmark::State& state) { issue13_vdw(state, false); }
+BENCHMARK(BM_DenseFilmVdw)
+    ->ArgName("threads")
+    ->Arg(1)
+    ->Arg(2)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SparseFilmVdw)
+    ->ArgName("threads")
+    ->Arg(1)
+    ->Arg(2)
+    ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 
 // The twist job's fixed scene: the thesis's 91-tube rope (N = 6, 50 segments, 4550 elements) with
