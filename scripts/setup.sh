@@ -27,6 +27,7 @@ PACKAGES=(
   clang-format           # code style (.clang-format)
   gnuplot-nox            # mdem plot
   python3                # tests: the independent reader of mdem export's files
+  python3-ase            # tests: ASE (3.22) reads mdem export's extended XYZ
   zlib1g-dev             # mdemd: CRC-32 of checkpoints
   openssl                # tests: a throwaway TLS certificate for mdemd
 )

@@ -35,7 +35,7 @@ constexpr const char* kOtherJob = "j-20260102-030406-ef01";  // shares the prefi
 
 // The independent reader: Python standard library only. Prints JSON of what it read.
 constexpr const char* kReader = R"py(
-import csv, json, os, sys
+import csv, json, os, struct, sys, zlib
 import xml.etree.ElementTree as ET
 
 def read_xyz(path):
@@ -61,36 +61,72 @@ def read_xyz(path):
         i += 2 + n
     return frames
 
-def read_array(da):
+# Binary VTK XML: the XML up to <AppendedData>, then raw data after '_'; each array at its offset
+# as vtkZLibDataCompressor writes it (UInt64 header: blocks, block size, last partial size, the
+# compressed sizes; then the zlib blocks), decoded here with zlib and struct.
+TYPES = {'Float64': 'd', 'Int64': 'q', 'Int32': 'i', 'UInt8': 'B'}
+
+def read_array(da, data):
     comps = int(da.get('NumberOfComponents', '1'))
-    conv = float if da.get('type').startswith('Float') else int
-    vals = [conv(t) for t in (da.text or '').split()]
+    if da.get('format') == 'ascii':
+        conv = float if da.get('type').startswith('Float') else int
+        vals = [conv(t) for t in (da.text or '').split()]
+    else:
+        assert da.get('format') == 'appended', da.attrib
+        at = int(da.get('offset'))
+        blocks, block, last = struct.unpack_from('<3Q', data, at)
+        sizes = struct.unpack_from('<%dQ' % blocks, data, at + 24)
+        at += 24 + 8 * blocks
+        raw = b''
+        for k, size in enumerate(sizes):
+            chunk = zlib.decompress(data[at:at + size])
+            want = last if (k == blocks - 1 and last) else block
+            assert len(chunk) == want, (len(chunk), want)
+            raw += chunk
+            at += size
+        fmt = TYPES[da.get('type')]
+        vals = list(struct.unpack('<%d%s' % (len(raw) // struct.calcsize(fmt), fmt), raw))
     return [vals[k:k + comps] for k in range(0, len(vals), comps)] if comps > 1 else vals
 
 def read_vtp(path):
-    root = ET.parse(path).getroot()
+    with open(path, 'rb') as f:
+        content = f.read()
+    head, sep, rest = content.partition(b'<AppendedData encoding="raw">')
+    assert sep, 'no appended data'
+    data = rest[rest.index(b'_') + 1:]
+    root = ET.fromstring(head + b'</VTKFile>')
     assert root.get('type') == 'PolyData'
+    assert root.get('compressor') == 'vtkZLibDataCompressor'
     piece = root.find('PolyData/Piece')
-    lines = piece.find('Lines')
-    conn = read_array(lines.find("DataArray[@Name='connectivity']"))
-    offsets = read_array(lines.find("DataArray[@Name='offsets']"))
-    polylines, start = [], 0
-    for o in offsets:
-        polylines.append(conn[start:o])
-        start = o
+    def cells(tag):
+        el = piece.find(tag)
+        conn = read_array(el.find("DataArray[@Name='connectivity']"), data)
+        offsets = read_array(el.find("DataArray[@Name='offsets']"), data)
+        out, start = [], 0
+        for o in offsets:
+            out.append(conn[start:o])
+            start = o
+        return out
     time = root.find("PolyData/FieldData/DataArray[@Name='TimeValue']")
+    def section(tag):
+        el = piece.find(tag)
+        return {} if el is None else {da.get('Name'): read_array(da, data)
+                                      for da in el.findall('DataArray')}
     return {'n_points': int(piece.get('NumberOfPoints')),
             'n_lines': int(piece.get('NumberOfLines')),
+            'n_polys': int(piece.get('NumberOfPolys')),
             'time': float(time.text),
-            'points': read_array(piece.find('Points/DataArray')),
-            'point_data': {da.get('Name'): read_array(da)
-                           for da in piece.find('PointData').findall('DataArray')},
-            'lines': polylines}
+            'points': read_array(piece.find('Points/DataArray'), data),
+            'point_data': section('PointData'),
+            'cell_data': section('CellData'),
+            'lines': cells('Lines') if piece.find('Lines') is not None else [],
+            'polys': cells('Polys') if piece.find('Polys') is not None else []}
 
 def read_pvd(path):
     root = ET.parse(path).getroot()
     assert root.get('type') == 'Collection'
-    sets = [{'timestep': float(d.get('timestep')), 'file': d.get('file')}
+    sets = [{'timestep': float(d.get('timestep')), 'file': d.get('file'),
+             'part': int(d.get('part'))}
             for d in root.find('Collection').findall('DataSet')]
     where = os.path.dirname(path)
     return {'datasets': sets, 'pieces': [read_vtp(os.path.join(where, d['file'])) for d in sets]}
@@ -283,7 +319,7 @@ TEST_F(ExportTest, ExtendedXyzHoldsEverySnapshotAsAFrame) {
   const json props = json::parse(
       R"([["species","S",1],["pos","R",3],["orientation","R",4],["axis","R",3],["radius","R",1],
           ["tube","I",1],["index","I",1],["force_nN","R",1],["torque_nNnm","R",1]])");
-  const std::map<std::int32_t, std::string> species = {{0, "C"}, {1, "Si"}, {2, "G"}};
+  const std::map<std::int32_t, std::string> species = {{0, "C"}, {1, "Si"}, {2, "Au"}};
   for (std::size_t f = 0; f < snaps_.size(); ++f) {
     const Snapshot& s = snaps_[f];
     const json& fr = frames[f];
@@ -315,8 +351,8 @@ TEST_F(ExportTest, VtkSeriesHasOnePolyDataPerSnapshotWithTubePolylines) {
   ASSERT_EQ(read["datasets"].size(), snaps_.size());
   for (std::size_t k = 0; k < snaps_.size(); ++k) {
     const Snapshot& s = snaps_[k];
-    EXPECT_EQ(read["datasets"][k]["file"], "rope_" + std::to_string(k) + ".vtp");
-    EXPECT_TRUE(fs::exists(file("vtk/rope_" + std::to_string(k) + ".vtp")));
+    EXPECT_EQ(read["datasets"][k]["file"], "rope_000" + std::to_string(k) + ".vtp");
+    EXPECT_TRUE(fs::exists(file("vtk/rope_000" + std::to_string(k) + ".vtp")));
     expect_close(read["datasets"][k]["timestep"], s.time_ps, "timestep");
     const json& p = read["pieces"][k];
     expect_close(p["time"], s.time_ps, "TimeValue");
@@ -370,7 +406,7 @@ TEST_F(ExportTest, DefaultOutputIsNamedAfterTheJobInTheCurrentDirectory) {
   EXPECT_EQ(png.code, mdem::cli::kOk) << png.err;
   EXPECT_TRUE(fs::exists(file(std::string(kJob) + ".csv")));
   EXPECT_TRUE(fs::exists(file(std::string(kJob) + ".pvd")));
-  EXPECT_TRUE(fs::exists(file(std::string(kJob) + "_2.vtp")));
+  EXPECT_TRUE(fs::exists(file(std::string(kJob) + "_0002.vtp")));
   EXPECT_TRUE(fs::exists(file(std::string(kJob) + ".png")));
 }
 

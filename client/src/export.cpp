@@ -1,21 +1,29 @@
 // Writers of extended XYZ, VTK XML PolyData + .pvd, and CSV; see export.h.
 #include "export.h"
 
+#include <zlib.h>
+
 #include <algorithm>
+#include <bit>
 #include <cctype>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 
 #include "flags.h"
+#include "mdem/spec.h"
 
 namespace mdem::cli {
 namespace {
 
 namespace fs = std::filesystem;
+
+constexpr std::int32_t kWallKind = static_cast<std::int32_t>(ElementKind::Wall);
 
 // %.17g: enough digits for every double to read back exactly.
 void num(std::string& out, double v) {
@@ -102,6 +110,17 @@ Snapshot load_snapshot(const ResultsStore& store, const JobRecord& job, std::siz
 
 // ---- extended XYZ -----------------------------------------------------------------------------
 
+// Walls (platens) are surfaces, not particles: left out of the particle files.
+bool is_wall(const Snapshot& s, std::size_t i) { return s.kind[i] == kWallKind; }
+
+std::vector<std::size_t> particle_ids(const Snapshot& s) {
+  std::vector<std::size_t> ids;
+  ids.reserve(s.size());
+  for (std::size_t i = 0; i < s.size(); ++i)
+    if (!is_wall(s, i)) ids.push_back(i);
+  return ids;
+}
+
 std::string xyz_header(const Snapshot& s) {
   std::string h =
       "Properties=species:S:1:pos:R:3:orientation:R:4:axis:R:3:radius:R:1:tube:I:1:index:I:1";
@@ -113,8 +132,8 @@ std::string xyz_header(const Snapshot& s) {
   return h + " Time=" + num(s.time_ps) + " Step=" + std::to_string(s.step);
 }
 
-std::string xyz_line(const Snapshot& s, std::size_t i) {
-  std::string line = species_of(s.kind[i]);
+std::string xyz_line(const Snapshot& s, std::size_t i, const char* grain) {
+  std::string line = species_of(s.kind[i], grain);
   const Quat& q = s.q[i];
   const Vec3 a = body_x_axis(q);
   // OVITO's Orientation property is the quaternion in X Y Z W order (W the scalar part).
@@ -131,146 +150,148 @@ std::string xyz_line(const Snapshot& s, std::size_t i) {
   return line;
 }
 
-// ---- VTK XML ----------------------------------------------------------------------------------
+// ---- VTK XML, binary ---------------------------------------------------------------------------
 
-// Writes <DataArray> with `comps` components per tuple; `tuple(line, i)` appends tuple i.
-template <class F>
-void data_array(std::ostream& os, const char* type, const std::string& name, int comps,
-                std::size_t n, F tuple) {
-  os << "        <DataArray type=\"" << type << "\"";
-  if (!name.empty()) os << " Name=\"" << xml_escape(name) << "\"";
-  os << " NumberOfComponents=\"" << comps << "\" format=\"ascii\">\n";
-  std::string line;
-  for (std::size_t i = 0; i < n; ++i) {
-    line = "          ";
-    tuple(line, i);
-    os << line << '\n';
+// The appended data of a VTK XML file (format="appended", encoding raw): each array as
+// vtkZLibDataCompressor writes it with header_type UInt64: the block count, the uncompressed block
+// size, the size of the last block when partial (0 when full), each block's compressed size, then
+// the zlib streams of the blocks.
+class AppendedData {
+ public:
+  // Appends an array of `bytes` bytes; returns its offset (from the '_' that starts the data).
+  std::size_t add(const void* data, std::size_t bytes) {
+    const std::size_t offset = out_.size();
+    const auto* p = static_cast<const unsigned char*>(data);
+    const std::size_t blocks = (bytes + kBlock - 1) / kBlock;
+    std::vector<std::uint64_t> header = {blocks, kBlock, bytes % kBlock};
+    std::string streams;
+    for (std::size_t b = 0; b < blocks; ++b) {
+      const std::size_t n = std::min(kBlock, bytes - b * kBlock);
+      uLongf size = compressBound(static_cast<uLong>(n));
+      std::string z(size, '\0');
+      if (compress2(reinterpret_cast<Bytef*>(z.data()), &size, p + b * kBlock,
+                    static_cast<uLong>(n), Z_DEFAULT_COMPRESSION) != Z_OK)
+        throw ExportError("zlib could not compress a VTK data array");
+      header.push_back(size);
+      streams.append(z.data(), size);
+    }
+    for (std::uint64_t h : header) put(h);
+    out_ += streams;
+    return offset;
   }
-  os << "        </DataArray>\n";
-}
-
-void append_numbers(std::string& line, std::initializer_list<double> values) {
-  bool first = true;
-  for (double v : values) {
-    if (!first) line += ' ';
-    num(line, v);
-    first = false;
+  template <class T>
+  std::size_t add(const std::vector<T>& v) {
+    return add(v.data(), v.size() * sizeof(T));
   }
+  const std::string& bytes() const { return out_; }
+
+ private:
+  static constexpr std::size_t kBlock = 1 << 15;
+  void put(std::uint64_t u) {
+    for (int b = 0; b < 8; ++b) out_.push_back(static_cast<char>((u >> (8 * b)) & 0xff));
+  }
+  std::string out_;
+};
+
+static_assert(std::endian::native == std::endian::little, "VTK files are written LittleEndian");
+
+// One <DataArray> of a piece; its values go to the appended data.
+struct VtkArray {
+  const char* type;  // Float64, Int32, Int64, UInt8
+  std::string name;
+  int comps;
+  std::size_t offset;
+};
+
+// The arrays of one piece, by section (PointData, Points, Verts, Lines, Polys, CellData).
+class VtkPiece {
+ public:
+  explicit VtkPiece(AppendedData& data) : data_(data) {}
+  template <class T>
+  void add(const std::string& section, const char* type, const std::string& name, int comps,
+           const std::vector<T>& values) {
+    sections_[section].push_back({type, name, comps, data_.add(values)});
+    if (std::find(order_.begin(), order_.end(), section) == order_.end()) order_.push_back(section);
+  }
+  void write(std::ostream& os, const std::string& attributes) const {
+    os << "    <Piece " << attributes << ">\n";
+    for (const std::string& section : order_) {
+      os << "      <" << section;
+      if (section == "PointData") os << " Scalars=\"radius\" Vectors=\"velocity\"";
+      os << ">\n";
+      for (const VtkArray& a : sections_.at(section)) {
+        os << "        <DataArray type=\"" << a.type << "\"";
+        if (!a.name.empty()) os << " Name=\"" << xml_escape(a.name) << "\"";
+        os << " NumberOfComponents=\"" << a.comps << "\" format=\"appended\" offset=\"" << a.offset
+           << "\"/>\n";
+      }
+      os << "      </" << section << ">\n";
+    }
+    os << "    </Piece>\n";
+  }
+
+ private:
+  AppendedData& data_;
+  std::map<std::string, std::vector<VtkArray>> sections_;
+  std::vector<std::string> order_;
+};
+
+// Values of the given elements, flattened.
+std::vector<double> flat(const std::vector<std::size_t>& ids,
+                         const std::function<void(std::vector<double>&, std::size_t)>& f) {
+  std::vector<double> out;
+  for (std::size_t i : ids) f(out, i);
+  return out;
 }
 
-void vtp_point_data(std::ostream& os, const Snapshot& s) {
-  const std::size_t n = s.size();
-  os << "      <PointData Scalars=\"radius\" Vectors=\"axis\">\n";
-  data_array(os, "Float64", "orientation", 4, n, [&](std::string& l, std::size_t i) {
-    append_numbers(l, {s.q[i].x(), s.q[i].y(), s.q[i].z(), s.q[i].w()});
-  });
-  data_array(os, "Float64", "axis", 3, n, [&](std::string& l, std::size_t i) {
-    const Vec3 a = body_x_axis(s.q[i]);
-    append_numbers(l, {a.x(), a.y(), a.z()});
-  });
-  data_array(os, "Float64", "radius", 1, n,
-             [&](std::string& l, std::size_t i) { num(l, s.radius[i]); });
-  data_array(os, "Int32", "kind", 1, n,
-             [&](std::string& l, std::size_t i) { l += std::to_string(s.kind[i]); });
-  data_array(os, "Int32", "tube", 1, n,
-             [&](std::string& l, std::size_t i) { l += std::to_string(s.tube[i]); });
-  data_array(os, "Int32", "index", 1, n,
-             [&](std::string& l, std::size_t i) { l += std::to_string(s.index[i]); });
-  for (const auto& [name, values] : s.scalars)
-    data_array(os, "Float64", name, 1, n,
-               [&](std::string& l, std::size_t i) { num(l, values[i]); });
-  os << "      </PointData>\n";
+template <class T>
+std::vector<T> pick(const std::vector<std::size_t>& ids, const std::vector<T>& all) {
+  std::vector<T> out;
+  out.reserve(ids.size());
+  for (std::size_t i : ids) out.push_back(all[i]);
+  return out;
 }
 
-void vtp_points(std::ostream& os, const Snapshot& s) {
-  os << "      <Points>\n";
-  data_array(os, "Float64", "position", 3, s.size(), [&](std::string& l, std::size_t i) {
-    append_numbers(l, {s.x[i].x(), s.x[i].y(), s.x[i].z()});
-  });
-  os << "      </Points>\n";
+// Cells as VTK wants them: connectivity (point ids) and offsets (one past each cell's end).
+void add_cells(VtkPiece& piece, const char* section,
+               const std::vector<std::vector<std::int64_t>>& cells) {
+  std::vector<std::int64_t> connectivity, offsets;
+  for (const auto& c : cells) {
+    connectivity.insert(connectivity.end(), c.begin(), c.end());
+    offsets.push_back(static_cast<std::int64_t>(connectivity.size()));
+  }
+  piece.add(section, "Int64", "connectivity", 1, connectivity);
+  piece.add(section, "Int64", "offsets", 1, offsets);
 }
 
-// Point ids of each tube with at least two segments, in index order; tubes by ascending id.
-std::vector<std::vector<std::size_t>> tube_polylines(const Snapshot& s) {
-  std::map<std::int32_t, std::vector<std::pair<std::int32_t, std::size_t>>> tubes;
-  for (std::size_t i = 0; i < s.size(); ++i)
-    if (s.tube[i] >= 0) tubes[s.tube[i]].emplace_back(s.index[i], i);
-  std::vector<std::vector<std::size_t>> lines;
+// Point ids (positions in `ids`) of each tube with at least two segments, in index order; tubes
+// by ascending id.
+std::vector<std::vector<std::int64_t>> tube_polylines(const Snapshot& s,
+                                                      const std::vector<std::size_t>& ids) {
+  std::map<std::int32_t, std::vector<std::pair<std::int32_t, std::int64_t>>> tubes;
+  for (std::size_t p = 0; p < ids.size(); ++p)
+    if (s.tube[ids[p]] >= 0)
+      tubes[s.tube[ids[p]]].emplace_back(s.index[ids[p]], static_cast<std::int64_t>(p));
+  std::vector<std::vector<std::int64_t>> lines;
   for (auto& [tube, members] : tubes) {
     if (members.size() < 2) continue;
     std::sort(members.begin(), members.end());
-    std::vector<std::size_t> ids;
-    for (const auto& m : members) ids.push_back(m.second);
-    lines.push_back(std::move(ids));
+    std::vector<std::int64_t> line;
+    for (const auto& m : members) line.push_back(m.second);
+    lines.push_back(std::move(line));
   }
   return lines;
 }
 
-// <Verts> or <Lines>: connectivity and offsets of the given cells.
-void vtp_cells(std::ostream& os, const char* tag,
-               const std::vector<std::vector<std::size_t>>& cells) {
-  std::vector<std::size_t> connectivity, offsets;
-  for (const auto& c : cells) {
-    connectivity.insert(connectivity.end(), c.begin(), c.end());
-    offsets.push_back(connectivity.size());
-  }
-  os << "      <" << tag << ">\n";
-  data_array(os, "Int64", "connectivity", 1, connectivity.size(),
-             [&](std::string& l, std::size_t i) { l += std::to_string(connectivity[i]); });
-  data_array(os, "Int64", "offsets", 1, offsets.size(),
-             [&](std::string& l, std::size_t i) { l += std::to_string(offsets[i]); });
-  os << "      </" << tag << ">\n";
-}
-
-std::vector<std::vector<std::size_t>> one_vertex_per_point(std::size_t n) {
-  std::vector<std::vector<std::size_t>> verts(n);
-  for (std::size_t i = 0; i < n; ++i) verts[i] = {i};
-  return verts;
-}
-
-// ---- CSV --------------------------------------------------------------------------------------
-
-std::string csv_row(const SeriesFrame& f) {
-  std::string row = std::to_string(f.step) + ',' + num(f.time_ps);
-  for (double v : f.values) {
-    row += ',';
-    num(row, v);
-  }
-  return row;
-}
-
-}  // namespace
-
-const char* species_of(std::int32_t kind) {
-  switch (kind) {
-    case 0:
-      return "C";
-    case 1:
-      return "Si";
-    case 2:
-      return "G";
-    default:
-      return "X";
-  }
-}
-
-void write_xyz_frame(std::ostream& os, const Snapshot& s) {
-  os << s.size() << '\n' << xyz_header(s) << '\n';
-  for (std::size_t i = 0; i < s.size(); ++i) os << xyz_line(s, i) << '\n';
-}
-
-void write_vtp(std::ostream& os, const Snapshot& s) {
-  const auto lines = tube_polylines(s);
+void write_vtk_document(std::ostream& os, const Snapshot& s, const std::string& what,
+                        const std::string& piece_attributes, const VtkPiece& piece,
+                        const AppendedData& data) {
   os << "<?xml version=\"1.0\"?>\n"
         "<!-- mdem snapshot, step "
-     << s.step << ", time " << num(s.time_ps)
-     << " ps; lengths in nm.\n"
-        "     Points: element centres. orientation: the unit quaternion body -> world in x y z w\n"
-        "     order (w the scalar part, as OVITO's Orientation). axis: body x in the world frame\n"
-        "     (a CNT segment's axis). Verts: one per element. Lines: one polyline per tube\n"
-        "     through its segments in index order. -->\n"
+     << s.step << ", time " << num(s.time_ps) << " ps; lengths in nm. " << what
+     << "\n     Binary: appended raw data, zlib-compressed blocks (vtkZLibDataCompressor). -->\n"
         "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
-        "header_type=\"UInt64\">\n"
+        "header_type=\"UInt64\" compressor=\"vtkZLibDataCompressor\">\n"
         "  <PolyData>\n"
         "    <FieldData>\n"
         "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
@@ -280,41 +301,186 @@ void write_vtp(std::ostream& os, const Snapshot& s) {
         "      <DataArray type=\"Int64\" Name=\"Step\" NumberOfTuples=\"1\" format=\"ascii\">"
      << s.step
      << "</DataArray>\n"
-        "    </FieldData>\n"
-     << "    <Piece NumberOfPoints=\"" << s.size() << "\" NumberOfVerts=\"" << s.size()
-     << "\" NumberOfLines=\"" << lines.size() << "\" NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n";
-  vtp_point_data(os, s);
-  vtp_points(os, s);
-  vtp_cells(os, "Verts", one_vertex_per_point(s.size()));
-  vtp_cells(os, "Lines", lines);
-  os << "    </Piece>\n  </PolyData>\n</VTKFile>\n";
+        "    </FieldData>\n";
+  piece.write(os, piece_attributes);
+  os << "  </PolyData>\n  <AppendedData encoding=\"raw\">\n   _";
+  os.write(data.bytes().data(), static_cast<std::streamsize>(data.bytes().size()));
+  os << "\n  </AppendedData>\n</VTKFile>\n";
 }
 
-void write_pvd(std::ostream& os, const std::vector<std::pair<double, std::string>>& datasets) {
+constexpr int kDiscSides = 64;
+
+}  // namespace
+
+const char* species_of(std::int32_t kind, const char* grain) {
+  switch (kind) {
+    case 0:
+      return "C";
+    case 1:
+      return "Si";
+    case 2:
+      return grain;
+    default:
+      return "X";
+  }
+}
+
+const char* grain_species(const JobRecord& job) {
+  if (job.kind != "compression") return "Au";
+  try {
+    const v1::JobSpec spec = spec::parse_json(job.spec_json);
+    const v1::GrainMaterialKind m = spec.compression().material();
+    return m == v1::GRAIN_MATERIAL_UNSPECIFIED || m == v1::GOLD ? "Au" : "X";
+  } catch (const std::exception&) {
+    return "X";  // a spec this mdem cannot read: no claim about the material
+  }
+}
+
+void write_xyz_frame(std::ostream& os, const Snapshot& s, const char* grain) {
+  const std::vector<std::size_t> ids = particle_ids(s);
+  os << ids.size() << '\n' << xyz_header(s) << '\n';
+  for (std::size_t i : ids) os << xyz_line(s, i, grain) << '\n';
+}
+
+void write_vtp(std::ostream& os, const Snapshot& s) {
+  const std::vector<std::size_t> ids = particle_ids(s);
+  const std::size_t n = ids.size();
+  AppendedData data;
+  VtkPiece piece(data);
+  piece.add("PointData", "Float64", "orientation", 4, flat(ids, [&](auto& v, std::size_t i) {
+              v.insert(v.end(), {s.q[i].x(), s.q[i].y(), s.q[i].z(), s.q[i].w()});
+            }));
+  piece.add("PointData", "Float64", "axis", 3, flat(ids, [&](auto& v, std::size_t i) {
+              const Vec3 a = body_x_axis(s.q[i]);
+              v.insert(v.end(), {a.x(), a.y(), a.z()});
+            }));
+  piece.add("PointData", "Float64", "radius", 1, pick(ids, s.radius));
+  piece.add("PointData", "Int32", "kind", 1, pick(ids, s.kind));
+  piece.add("PointData", "Int32", "tube", 1, pick(ids, s.tube));
+  piece.add("PointData", "Int32", "index", 1, pick(ids, s.index));
+  for (const auto& [name, values] : s.scalars)
+    piece.add("PointData", "Float64", name, 1, pick(ids, values));
+  piece.add("Points", "Float64", "position", 3, flat(ids, [&](auto& v, std::size_t i) {
+              v.insert(v.end(), {s.x[i].x(), s.x[i].y(), s.x[i].z()});
+            }));
+  std::vector<std::vector<std::int64_t>> verts(n);
+  for (std::size_t p = 0; p < n; ++p) verts[p] = {static_cast<std::int64_t>(p)};
+  add_cells(piece, "Verts", verts);
+  const auto lines = tube_polylines(s, ids);
+  add_cells(piece, "Lines", lines);
+  write_vtk_document(
+      os, s,
+      "\n     Points: element centres (platens are in the _walls files). orientation: the unit "
+      "quaternion\n     body -> world in x y z w order (w the scalar part, as OVITO's "
+      "Orientation). axis: body x in the\n     world frame (a CNT segment's axis). Verts: one "
+      "per element. Lines: one polyline per tube\n     through its segments in index order.",
+      "NumberOfPoints=\"" + std::to_string(n) + "\" NumberOfVerts=\"" + std::to_string(n) +
+          "\" NumberOfLines=\"" + std::to_string(lines.size()) +
+          "\" NumberOfStrips=\"0\" NumberOfPolys=\"0\"",
+      piece, data);
+}
+
+bool has_walls(const Snapshot& s) {
+  for (std::size_t i = 0; i < s.size(); ++i)
+    if (is_wall(s, i)) return true;
+  return false;
+}
+
+void write_walls_vtp(std::ostream& os, const Snapshot& s) {
+  AppendedData data;
+  VtkPiece piece(data);
+  std::vector<double> points, normals;
+  std::vector<std::vector<std::int64_t>> polys;
+  std::vector<std::int32_t> element;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (!is_wall(s, i)) continue;
+    const Vec3 u = s.q[i] * Vec3::UnitX(), w = s.q[i] * Vec3::UnitY(), nrm = s.q[i] * Vec3::UnitZ();
+    std::vector<std::int64_t> poly;
+    for (int k = 0; k < kDiscSides; ++k) {
+      const double phi = 2 * M_PI * k / kDiscSides;
+      const Vec3 p = s.x[i] + s.radius[i] * (std::cos(phi) * u + std::sin(phi) * w);
+      poly.push_back(static_cast<std::int64_t>(points.size() / 3));
+      points.insert(points.end(), {p.x(), p.y(), p.z()});
+    }
+    polys.push_back(std::move(poly));
+    normals.insert(normals.end(), {nrm.x(), nrm.y(), nrm.z()});
+    element.push_back(static_cast<std::int32_t>(i));
+  }
+  piece.add("Points", "Float64", "position", 3, points);
+  add_cells(piece, "Polys", polys);
+  piece.add("CellData", "Float64", "normal", 3, normals);
+  piece.add("CellData", "Int32", "element", 1, element);
+  write_vtk_document(
+      os, s,
+      "\n     Platens: one disc per platen (a " + std::to_string(kDiscSides) +
+          "-gon of the platen's radius in its plane);\n     normal: towards the material; "
+          "element: the platen's element number in the snapshot.",
+      "NumberOfPoints=\"" + std::to_string(points.size() / 3) +
+          "\" NumberOfVerts=\"0\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"" +
+          std::to_string(polys.size()) + "\"",
+      piece, data);
+}
+
+void write_pvd(std::ostream& os, const std::vector<PvdDataSet>& datasets) {
   os << "<?xml version=\"1.0\"?>\n"
         "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
         "  <Collection>\n";
-  for (const auto& [time, file] : datasets)
-    os << "    <DataSet timestep=\"" << num(time) << "\" group=\"\" part=\"0\" file=\""
-       << xml_escape(file) << "\"/>\n";
+  for (const PvdDataSet& d : datasets)
+    os << "    <DataSet timestep=\"" << num(d.time_ps) << "\" group=\"\" part=\"" << d.part
+       << "\" name=\"" << xml_escape(d.name) << "\" file=\"" << xml_escape(d.file) << "\"/>\n";
   os << "  </Collection>\n</VTKFile>\n";
+}
+
+std::vector<std::string> csv_header(const std::vector<std::string>& columns) {
+  std::vector<std::string> header = {"step", "time_ps"};
+  for (const std::string& c : columns) {
+    std::string name = c;
+    for (int k = 2; std::find(header.begin(), header.end(), name) != header.end(); ++k)
+      name = c + "_" + std::to_string(k);
+    header.push_back(name);
+  }
+  return header;
 }
 
 void write_csv(std::ostream& os, const std::vector<std::string>& columns,
                const std::vector<SeriesFrame>& frames) {
-  os << "step,time_ps";
-  for (const std::string& c : columns) os << ',' << csv_cell(c);
+  // A column repeating the frame's own time (compression's time_ps) is written once.
+  std::vector<bool> keep(columns.size(), true);
+  for (std::size_t c = 0; c < columns.size(); ++c)
+    if (columns[c] == "time_ps")
+      keep[c] = std::any_of(frames.begin(), frames.end(),
+                            [&](const SeriesFrame& f) { return f.values[c] != f.time_ps; });
+  std::vector<std::string> kept;
+  for (std::size_t c = 0; c < columns.size(); ++c)
+    if (keep[c]) kept.push_back(columns[c]);
+  const std::vector<std::string> header = csv_header(kept);
+  for (std::size_t k = 0; k < header.size(); ++k) os << (k ? "," : "") << csv_cell(header[k]);
   os << '\n';
-  for (const SeriesFrame& f : frames) os << csv_row(f) << '\n';
+  for (const SeriesFrame& f : frames) {
+    std::string row = std::to_string(f.step) + ',' + num(f.time_ps);
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+      if (!keep[c]) continue;
+      row += ',';
+      num(row, f.values[c]);
+    }
+    os << row << '\n';
+  }
 }
 
 std::vector<std::string> export_xyz(const ResultsStore& store, const JobRecord& job,
                                     const std::string& path) {
   const std::size_t count = require_snapshots(store, job, "xyz");
+  const char* grain = grain_species(job);
   std::ofstream os = open_out(path);
-  for (std::size_t k = 0; k < count; ++k) write_xyz_frame(os, load_snapshot(store, job, k));
+  for (std::size_t k = 0; k < count; ++k) write_xyz_frame(os, load_snapshot(store, job, k), grain);
   close_out(os, path);
   return {path};
+}
+
+std::string numbered(std::size_t k, std::size_t count) {
+  std::string digits = std::to_string(k);
+  const std::size_t width = std::max<std::size_t>(4, std::to_string(count - 1).size());
+  return std::string(width - std::min(width, digits.size()), '0') + digits;
 }
 
 std::vector<std::string> export_vtk(const ResultsStore& store, const JobRecord& job,
@@ -323,17 +489,23 @@ std::vector<std::string> export_vtk(const ResultsStore& store, const JobRecord& 
   if (pvd.extension() != ".pvd")
     throw UsageError("--out: '" + pvd_path + "' must end in .pvd for --format vtk");
   const std::size_t count = require_snapshots(store, job, "vtk");
-  std::vector<std::pair<double, std::string>> datasets;
+  std::vector<PvdDataSet> datasets;
   std::vector<std::string> written;
-  for (std::size_t k = 0; k < count; ++k) {
-    const Snapshot s = load_snapshot(store, job, k);
-    const std::string name = pvd.stem().string() + "_" + std::to_string(k) + ".vtp";
+  auto write = [&](const std::string& name, const Snapshot& s, int part, const char* label,
+                   void (*writer)(std::ostream&, const Snapshot&)) {
     const std::string path = (pvd.parent_path() / name).string();
     std::ofstream os = open_out(path);
-    write_vtp(os, s);
+    writer(os, s);
     close_out(os, path);
-    datasets.emplace_back(s.time_ps, name);
+    datasets.push_back({s.time_ps, part, label, name});
     written.push_back(path);
+  };
+  for (std::size_t k = 0; k < count; ++k) {
+    const Snapshot s = load_snapshot(store, job, k);
+    const std::string base = pvd.stem().string() + "_";
+    write(base + numbered(k, count) + ".vtp", s, 0, "elements", write_vtp);
+    if (has_walls(s))
+      write(base + "walls_" + numbered(k, count) + ".vtp", s, 1, "platens", write_walls_vtp);
   }
   std::ofstream os = open_out(pvd_path);
   write_pvd(os, datasets);

@@ -1,7 +1,7 @@
 #pragma once
-// Writers of a job's results for other programs: extended XYZ (OVITO), VTK XML PolyData with a
-// .pvd collection (ParaView), and CSV of the time series. Numbers are written with %.17g, so a
-// reader gets every double back exactly.
+// Writers of a job's results for other programs: extended XYZ (ASE, OVITO), binary VTK XML
+// PolyData with a .pvd collection (ParaView), and CSV of the time series. Text numbers are
+// written with %.17g and binary ones as float64, so a reader gets every double back exactly.
 #include <cstdint>
 #include <ostream>
 #include <stdexcept>
@@ -19,23 +19,41 @@ struct ExportError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Species written for an element kind: "C" CNT segment (0), "Si" nanoparticle (1), "G" grain
-// (2), "X" anything else.
-const char* species_of(std::int32_t kind);
+// The chemical symbol written for an element kind, one ASE and OVITO accept: "C" CNT segment
+// (0), "Si" nanoparticle (1), `grain` for a grain (2), "X" (ASE's dummy element) otherwise.
+const char* species_of(std::int32_t kind, const char* grain);
+// The symbol of a job's grains: "Au" for gold (a compression job's default material, and any job
+// of another kind), "X" for cadmium sulfide or a custom material (no one element).
+const char* grain_species(const JobRecord& job);
 
-// One extended-XYZ frame: the element count, the Properties/Time/Step line, one line per element.
-void write_xyz_frame(std::ostream& os, const Snapshot& s);
-// One snapshot as a VTK XML PolyData (.vtp) document, ASCII.
+// One extended-XYZ frame: the particle count, the Properties/Time/Step line, one line per element
+// that is not a wall (walls are surfaces: see write_walls_vtp).
+void write_xyz_frame(std::ostream& os, const Snapshot& s, const char* grain);
+// One snapshot's elements but walls as a VTK XML PolyData (.vtp) document: binary, the arrays
+// appended raw and zlib-compressed; one vertex per element, one polyline per tube.
 void write_vtp(std::ostream& os, const Snapshot& s);
-// A ParaView collection (.pvd) of (time_ps, file name) data sets.
-void write_pvd(std::ostream& os, const std::vector<std::pair<double, std::string>>& datasets);
-// The series as CSV: step,time_ps,<columns...>, one row per frame.
+// Whether the snapshot holds walls (platens), and the walls as a .vtp of one disc polygon each
+// (the platen's radius, in its plane), with their normals as cell data.
+bool has_walls(const Snapshot& s);
+void write_walls_vtp(std::ostream& os, const Snapshot& s);
+// A data set of a ParaView collection: part 0 the elements, part 1 the platens.
+struct PvdDataSet {
+  double time_ps = 0;
+  int part = 0;
+  std::string name;  // the part's name ("elements", "platens")
+  std::string file;
+};
+void write_pvd(std::ostream& os, const std::vector<PvdDataSet>& datasets);
+// The series as CSV: step,time_ps,<columns...>, one row per frame. Header names are unique: a
+// column that repeats the frame's time (named time_ps, equal in every frame) is left out, any
+// other clash gets a suffix _2, _3, ...
 void write_csv(std::ostream& os, const std::vector<std::string>& columns,
                const std::vector<SeriesFrame>& frames);
 
 // Whole-job exports, reading the store one snapshot at a time. Each returns the files written.
-// xyz: one file with every snapshot as a frame. vtk: `pvd_path` (must end in .pvd) and
-// <base>_<k>.vtp next to it. csv: one file. Throw ExportError (or StoreError).
+// xyz: one file with every snapshot as a frame. vtk: `pvd_path` (must end in .pvd) and, next to
+// it, <base>_<k>.vtp and (when there are platens) <base>_walls_<k>.vtp, k zero-padded to at
+// least 4 digits. csv: one file. Throw ExportError (or StoreError).
 std::vector<std::string> export_xyz(const ResultsStore& store, const JobRecord& job,
                                     const std::string& path);
 std::vector<std::string> export_vtk(const ResultsStore& store, const JobRecord& job,

@@ -85,6 +85,39 @@ CREATE TABLE snapshots (
 // w,x,y,z; radius float64; kind, tube, idx int32; scalar_names a JSON array; scalars float64,
 // n values per name in the order of the names.
 
+// The series in a long form that plain SQL reads (docs/results-db.md): frame_values holds frame
+// seq's value of column col (its index in jobs.columns_json) beside the packed frames.vals (which
+// stays the form mdem reads), and the view frames_long names each value and its unit (from the
+// column name's suffix). Added after version 1 was released, so created (and filled from the
+// BLOBs) when a writable file of an older mdem is opened; value has no type affinity, as time_ps.
+constexpr const char* kLongSchema = R"sql(
+CREATE TABLE IF NOT EXISTS frame_values (
+  job_id TEXT NOT NULL,
+  seq INTEGER NOT NULL,
+  col INTEGER NOT NULL,
+  value NOT NULL,
+  PRIMARY KEY (job_id, seq, col),
+  FOREIGN KEY (job_id, seq) REFERENCES frames (job_id, seq) ON DELETE CASCADE
+) WITHOUT ROWID;
+CREATE VIEW IF NOT EXISTS frames_long (job_id, seq, step, time_ps, name, value, unit) AS
+SELECT f.job_id, f.seq, f.step, f.time_ps, c.value, v.value,
+  CASE
+    WHEN c.value GLOB '*_eV' THEN 'eV'
+    WHEN c.value GLOB '*_nNnm' THEN 'nN·nm'
+    WHEN c.value GLOB '*_nN' THEN 'nN'
+    WHEN c.value GLOB '*_GPa' THEN 'GPa'
+    WHEN c.value GLOB '*_nm' THEN 'nm'
+    WHEN c.value GLOB '*_ps' THEN 'ps'
+    WHEN c.value GLOB '*_deg' THEN 'deg'
+    WHEN c.value GLOB '*_K' THEN 'K'
+    ELSE ''
+  END
+FROM frames AS f
+JOIN frame_values AS v ON v.job_id = f.job_id AND v.seq = f.seq
+JOIN jobs AS j ON j.id = f.job_id
+JOIN json_each(j.columns_json) AS c ON c.key = v.col;
+)sql";
+
 // The columns of the first schema; the columns of kMigrations follow them in a JobRecord.
 constexpr const char* kFirstJobColumns =
     "id, kind, spec_json, state, reason, summary_json, created_at, finished_at";
@@ -285,7 +318,44 @@ void check_schema_version(Impl& db) {
 bool needs_migration(Impl& db) {
   for (const Migration& m : kMigrations)
     if (!db.has_column("jobs", m.column)) return true;
-  return false;
+  return !db.has_table("frame_values");
+}
+
+void insert_frame_values(Impl& db, const std::string& id, long seq,
+                         const std::vector<double>& values) {
+  for (std::size_t c = 0; c < values.size(); ++c) {
+    Query q(db, "INSERT INTO frame_values (job_id, seq, col, value) VALUES (?, ?, ?, ?)",
+            "cannot write a frame value of job '" + id + "'");
+    q.bind(1, id).bind(2, seq).bind(3, static_cast<long>(c)).bind(4, values[c]).run();
+  }
+}
+
+std::vector<double> decode_frame_values(const Impl& db, const std::string& vals) {
+  if (vals.size() % 8 != 0) throw StoreError(db.where() + ": corrupt frame values");
+  std::vector<double> values(vals.size() / 8);
+  for (std::size_t k = 0; k < values.size(); ++k) values[k] = get_f64(vals, k);
+  return values;
+}
+
+// Creates the long form of the series and fills it from the BLOBs of frames that have no rows
+// in it (all of them in a file of an older mdem); in the caller's transaction.
+void add_long_series(Impl& db) {
+  db.exec(kLongSchema, "cannot create the frame_values table and frames_long view");
+  struct Pending {
+    std::string id;
+    long seq;
+    std::vector<double> values;
+  };
+  std::vector<Pending> pending;
+  {
+    Query q(db,
+            "SELECT f.job_id, f.seq, f.vals FROM frames AS f WHERE length(f.vals) > 0 AND NOT "
+            "EXISTS (SELECT 1 FROM frame_values AS v WHERE v.job_id = f.job_id AND v.seq = f.seq)",
+            "cannot read the frames");
+    while (q.step())
+      pending.push_back({q.text(0), q.integer(1), decode_frame_values(db, q.blob(2))});
+  }
+  for (const Pending& p : pending) insert_frame_values(db, p.id, p.seq, p.values);
 }
 
 // Adds the columns of kMigrations that a file of an older mdem lacks. A read-only file (opened
@@ -304,6 +374,7 @@ void migrate(Impl& db) {
     if (!db.has_column("jobs", m.column))  // another process may have added it meanwhile
       db.exec((std::string("ALTER TABLE jobs ADD COLUMN ") + m.definition).c_str(),
               std::string("cannot add the column '") + m.column + "' to the jobs table");
+  add_long_series(db);
   t.commit();
 }
 
@@ -322,6 +393,7 @@ void ensure_schema(Impl& db) {
   }
   StoreDb::refuse_foreign(db);
   db.exec(kSchema, "cannot create the schema");
+  db.exec(kLongSchema, "cannot create the schema");
   Query(db, "INSERT INTO schema_version (version) VALUES (?)", "cannot create the schema")
       .bind(1, static_cast<long>(kSchemaVersion))
       .run();
@@ -546,8 +618,9 @@ void write_frames(Impl& db, const std::string& id, const std::vector<SeriesFrame
   for (const SeriesFrame& f : frames) {
     Query q(db, "INSERT INTO frames (job_id, seq, step, time_ps, vals) VALUES (?, ?, ?, ?, ?)",
             "cannot write a frame of job '" + id + "'");
-    q.bind(1, id).bind(2, seq++).bind(3, f.step).bind(4, f.time_ps).bind_blob(5, encode(f.values));
+    q.bind(1, id).bind(2, seq).bind(3, f.step).bind(4, f.time_ps).bind_blob(5, encode(f.values));
     q.run();
+    insert_frame_values(db, id, seq++, f.values);
   }
 }
 
@@ -810,13 +883,8 @@ std::vector<SeriesFrame> ResultsStore::frames(const std::string& id) const {
             "cannot read the frames of job '" + id + "'");
     q.bind(1, id);
     std::vector<SeriesFrame> frames;
-    while (q.step()) {
-      const std::string vals = q.blob(2);
-      if (vals.size() % 8 != 0) throw StoreError(db.where() + ": corrupt frame values");
-      SeriesFrame f{q.integer(0), q.real(1), std::vector<double>(vals.size() / 8)};
-      for (std::size_t k = 0; k < f.values.size(); ++k) f.values[k] = get_f64(vals, k);
-      frames.push_back(std::move(f));
-    }
+    while (q.step())
+      frames.push_back({q.integer(0), q.real(1), decode_frame_values(db, q.blob(2))});
     return frames;
   });
 }
