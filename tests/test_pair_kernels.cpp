@@ -15,8 +15,12 @@
 #include "mdem/force/bond/grain_bond.h"
 #include "mdem/force/contact/anisotropic_vdw.h"
 #include "mdem/force/contact/linear_contact.h"
+#include "mdem/force/contact/np_cnt_contact.h"
+#include "mdem/force/contact/np_np_contact.h"
+#include "mdem/force/damping/np_contact_damping.h"
 #include "mdem/force/damping/viscous_contact_damping.h"
 #include "mdem/scene/grain.h"
+#include "mdem/scene/nanoparticle.h"
 #include "mdem/scene/tube_builder.h"
 
 using namespace mdem;
@@ -111,6 +115,55 @@ struct Traits<GrainContactDashpotKernel> {
   static Elements pair(std::mt19937_64& g) { return grain_pair(g, 0.7, 0.99); }
 };
 
+// A nanoparticle and a CNT segment 1.5–5.3 nm apart (the linear branch, the well and the f_c
+// ramp), in either order, both moving.
+Elements np_segment_pair(std::mt19937_64& g) {
+  std::uniform_real_distribution<double> r(1.5, 5.3);
+  std::normal_distribution<double> vel(0.0, 0.5);
+  const Vec3 xs(0.3, -0.2, 0.1), xn = xs + r(g) * random_unit(g);
+  const ElementInit seg = cnt_segment(xs, quat_from_axis(random_unit(g)), 0, 0);
+  ElementInit np = nanoparticle(xn);
+  np.q = random_rotation(g);
+  Elements el;
+  const bool np_first = std::uniform_int_distribution<int>(0, 1)(g) == 1;
+  el.add(np_first ? np : seg);
+  el.add(np_first ? seg : np);
+  for (std::size_t i = 0; i < 2; ++i) {
+    el.v[i] = Vec3(vel(g), vel(g), vel(g));
+    el.w[i] = Vec3(vel(g), vel(g), vel(g));
+  }
+  return el;
+}
+
+template <>
+struct Traits<NpCntKernel> {
+  static NpCntKernel make() { return NpCntKernel(NpCntParams{}); }
+  static Elements pair(std::mt19937_64& g) { return np_segment_pair(g); }
+  static double reach(const NpCntKernel& k, const Elements&) { return k.cutoff(); }
+};
+
+template <>
+struct Traits<NpNpKernel> {
+  static NpNpKernel make() { return NpNpKernel(NpNpParams{}); }
+  // 4.5–7.9 nm apart: the linear branch (below 5.25), the well and the f_c ramp (7–8).
+  static Elements pair(std::mt19937_64& g) {
+    std::uniform_real_distribution<double> r(4.5, 7.9);
+    Elements el;
+    el.add(nanoparticle(Vec3(-1.0, 0.5, 2.0)));
+    el.add(nanoparticle(Vec3(-1.0, 0.5, 2.0) + r(g) * random_unit(g)));
+    el.q[0] = random_rotation(g);
+    el.q[1] = random_rotation(g);
+    return el;
+  }
+  static double reach(const NpNpKernel& k, const Elements&) { return k.cutoff(); }
+};
+
+template <>
+struct Traits<NpDashpotKernel> {
+  static NpDashpotKernel make() { return np_cnt_dashpot(0.03); }
+  static Elements pair(std::mt19937_64& g) { return np_segment_pair(g); }
+};
+
 // Every pair kernel; the conservative ones; the dampers.
 template <class K>
 class AnyPairKernel : public ::testing::Test {};
@@ -119,10 +172,13 @@ class ConservativeKernel : public ::testing::Test {};
 template <class K>
 class DampingKernel : public ::testing::Test {};
 
-using AllKernels = ::testing::Types<VdwKernel, LinearContactKernel, ContactDampingKernel,
-                                    GrainContactDashpotKernel>;
-using ConservativeKernels = ::testing::Types<VdwKernel, LinearContactKernel>;
-using DampingKernels = ::testing::Types<ContactDampingKernel, GrainContactDashpotKernel>;
+using AllKernels =
+    ::testing::Types<VdwKernel, LinearContactKernel, ContactDampingKernel,
+                     GrainContactDashpotKernel, NpCntKernel, NpNpKernel, NpDashpotKernel>;
+using ConservativeKernels =
+    ::testing::Types<VdwKernel, LinearContactKernel, NpCntKernel, NpNpKernel>;
+using DampingKernels =
+    ::testing::Types<ContactDampingKernel, GrainContactDashpotKernel, NpDashpotKernel>;
 TYPED_TEST_SUITE(AnyPairKernel, AllKernels);
 TYPED_TEST_SUITE(ConservativeKernel, ConservativeKernels);
 TYPED_TEST_SUITE(DampingKernel, DampingKernels);

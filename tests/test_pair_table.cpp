@@ -26,7 +26,7 @@ class NpCntStandIn {
  public:
   static constexpr bool kDissipative = false;
   static constexpr bool kTorques = false;
-  static constexpr EnergyTerm kTerm = EnergyTerm::Nanoparticle;
+  static constexpr EnergyTerm kTerm = EnergyTerm::NpCnt;
   static constexpr double kCutoff = 8.0, kSigma = 3.0, kEps = 0.5;
 
   std::string_view name() const { return "np_cnt_standin"; }
@@ -221,7 +221,7 @@ TEST(PairTable, ForcesAreTheSumOfTheModelsPairForces) {
   ASSERT_GT(np_near_tube, 5);  // pairs the dashpot would damp if it did not filter kinds
   const auto& E = sys.energy().potential.stored;
   EXPECT_NEAR(E[static_cast<int>(EnergyTerm::Vdw)], e_vdw, 1e-10 * std::abs(e_vdw));
-  EXPECT_NEAR(E[static_cast<int>(EnergyTerm::Nanoparticle)], e_np, 1e-10 * std::abs(e_np));
+  EXPECT_NEAR(E[static_cast<int>(EnergyTerm::NpCnt)], e_np, 1e-10 * std::abs(e_np));
   ASSERT_LT(e_np, -0.1);
   double fs = 0;
   for (std::size_t i = 0; i < n; ++i) fs = std::max(fs, f[i].norm());

@@ -483,7 +483,8 @@ TEST(ParallelBond, ComputeOnTubeMatchesBondSum) {
       EXPECT_NEAR(tally.stored[static_cast<int>(terms[k])], e_ref[k], 1e-12 * e_ref[k])
           << "threads " << nt << " term " << k;
     EXPECT_EQ(tally.stored[static_cast<int>(EnergyTerm::Vdw)], 0.0);
-    EXPECT_EQ(tally.stored[static_cast<int>(EnergyTerm::Nanoparticle)], 0.0);
+    EXPECT_EQ(tally.stored[static_cast<int>(EnergyTerm::NpCnt)], 0.0);
+    EXPECT_EQ(tally.stored[static_cast<int>(EnergyTerm::NpNp)], 0.0);
     EXPECT_EQ(tally.stored[static_cast<int>(EnergyTerm::Contact)], 0.0);
     // The per-thread slots of a 2-thread sink both took part (bonds split statically).
     if (nt == 2) {

@@ -12,14 +12,16 @@ enum class EnergyTerm : int {
   BondBending,
   BondTorsion,
   Vdw,
-  Nanoparticle,
+  NpCnt,  // nanoparticle–CNT segment contacts (model.md §5)
+  NpNp,   // nanoparticle–nanoparticle contacts (model.md §5)
   Contact,
   kCount
 };
 inline constexpr int kEnergyTermCount = static_cast<int>(EnergyTerm::kCount);
 
 inline constexpr std::array<std::string_view, kEnergyTermCount> kEnergyTermNames = {
-    "bond_tension", "bond_shear", "bond_bending", "bond_torsion", "vdw", "nanoparticle", "contact"};
+    "bond_tension", "bond_shear", "bond_bending", "bond_torsion",
+    "vdw",          "np_cnt",     "np_np",        "contact"};
 
 // Potential energies of one force evaluation, by component.
 struct EnergyTally {

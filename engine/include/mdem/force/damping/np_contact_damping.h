@@ -1,0 +1,74 @@
+#pragma once
+// Viscous dashpots in the nanoparticle contacts (model.md §4's Eq. 33–34 carried over to NP pairs,
+// tensile.md §3.4): on every pair of an NP contact within its cutoff, a force −c·(n·v_rel)·n along
+// the centre line n, c = 2ψ√(m_eff k), m_eff the pair's reduced mass (an NP is 41 segment masses,
+// so m_eff is close to the segment's on NP–CNT pairs and half an NP's on NP–NP pairs).
+//
+// Each dashpot belongs to its contact (owner() = the contact's name): it acts on exactly that
+// contact's pairs and no others. Normal-only, like the CNT–CNT dashpot
+// (viscous_contact_damping.h): rigid motions are not damped, linear and angular momentum are
+// conserved, and the NP gets no torque.
+//
+// The stiffness k of c = 2ψ√(m_eff k) is, by default, the curvature of the contact's own law at
+// its equilibrium (np_cnt_contact.h, np_np_contact.h: 555.9 eV/nm² NP–NP, V''(D0)/ρ_NC² NP–CNT),
+// so ψ is the damping ratio of the pair's own small oscillation about its minimum. (tensile.md's
+// defaults table instead reuses the CNT–CNT k = 100 eV/nm² for NP pairs; set `stiffness` to run
+// that.)
+#include <string_view>
+
+#include "mdem/force/contact/np_cnt_contact.h"
+#include "mdem/force/contact/np_np_contact.h"
+#include "mdem/force/pair_driver.h"
+
+namespace mdem {
+
+struct NpDampingParams {
+  double ratio = 0.03;     // ψ (the CNT–CNT dashpot's, thesis)
+  double stiffness = 0.0;  // k (eV/nm²); must be > 0 (the factories set the contact's curvature)
+  double cutoff = 0.0;     // acts on pairs closer than this (nm): the contact's cutoff
+};
+
+// The dashpot pair kernel of one NP contact (pair_driver.h).
+class NpDashpotKernel {
+ public:
+  static constexpr bool kDissipative = true;
+  static constexpr bool kTorques = false;
+  static constexpr EnergyTerm kTerm = EnergyTerm::NpCnt;  // unused: dissipative
+
+  // name, owner: static strings. Throws std::invalid_argument for a ratio outside [0, 10], a
+  // non-positive stiffness or cutoff.
+  NpDashpotKernel(std::string_view name, std::string_view owner, KindPairs kinds,
+                  NpDampingParams p);
+  std::string_view name() const { return name_; }
+  std::string_view owner() const { return owner_; }
+  bool active() const { return p_.ratio != 0; }
+  double cutoff() const { return p_.cutoff; }
+  KindPairs kinds() const { return kinds_; }
+  bool excludes(const Elements& el, std::size_t i, std::size_t j) const {
+    return !kinds_.has(el.kind[i], el.kind[j]);
+  }
+  bool pair(const Elements& el, std::size_t i, std::size_t j, const Vec3& d, PairForces& out) const;
+  void stiffness(const Elements& el, std::size_t i, std::size_t j, const Vec3& d,
+                 StiffnessSums& s) const;
+  const NpDampingParams& params() const { return p_; }
+
+ private:
+  std::string_view name_, owner_;
+  KindPairs kinds_;
+  NpDampingParams p_;
+};
+
+// The dashpots of the NP–CNT and NP–NP contacts with parameters `contact`: cutoff the contact's,
+// stiffness its equilibrium curvature.
+NpDashpotKernel np_cnt_dashpot(double ratio = 0.03, const NpCntParams& contact = {});
+NpDashpotKernel np_np_dashpot(double ratio = 0.03, const NpNpParams& contact = {});
+
+extern template class PairModel<NpDashpotKernel>;
+
+class NpContactDamping final : public PairModel<NpDashpotKernel> {
+ public:
+  explicit NpContactDamping(NpDashpotKernel k) : PairModel<NpDashpotKernel>(k) {}
+  const NpDampingParams& params() const { return k_.params(); }
+};
+
+}  // namespace mdem
