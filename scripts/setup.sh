@@ -15,6 +15,7 @@ PACKAGES=(
   libgtest-dev           # tests
   libgmock-dev           # tests
   libbenchmark-dev       # bench/
+  libhwy-dev             # engine: SIMD with run-time dispatch (Google Highway)
   nlohmann-json3-dev     # CLI JSON output
   libsqlite3-dev         # results database (service)
   libspdlog-dev          # logging (service)

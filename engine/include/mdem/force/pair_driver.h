@@ -24,10 +24,17 @@
 //   bool active() const;                  // false: the model does nothing (a zero damping ratio)
 //   void begin(const Elements&) const;    // per evaluation, serial (size a per-step cache)
 //   void prepare(const Elements&, long i) const;  // per evaluation and element, threaded
+//   bool batched() const;                 // with batch(): evaluate over PairBatch'es (SIMD)
+//   void batch(const Elements&, PairBatch&) const;
+//       // fills the outputs of the batch's n pairs (see PairBatch); the driver gathers only pairs
+//       // closer than cutoff(), in list order, and adds the results in the same order, so a
+//       // kernel with a batch path must not act beyond its cutoff, and f2 = −f1 (no external
+//       // force on the pair)
 // PairModel<K> makes a ForceModel of it.
 #include <omp.h>
 
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -48,6 +55,22 @@ struct PairForces {
 inline double dashpot_coefficient(double ratio, double mi, double mj, double k) {
   return 2.0 * ratio * std::sqrt(mi * mj / (mi + mj) * k);
 }
+
+// Pairs gathered for a batched kernel, in structure-of-arrays form: the driver fills i, j and the
+// minimum-image displacement d = x_j − x_i of lanes [0, n); the kernel fills each lane's energy,
+// force f on i (the force on j is −f) and torques t1 on i, t2 on j, all zero for a pair that
+// does not interact. Lanes [n, kCapacity) are the kernel's scratch (e.g. padding to a whole
+// number of vectors). kCapacity is a multiple of 8, the widest vector of doubles (512 bits).
+struct PairBatch {
+  static constexpr int kCapacity = 64;
+  int n = 0;
+  alignas(64) std::uint32_t i[kCapacity], j[kCapacity];
+  alignas(64) double dx[kCapacity], dy[kCapacity], dz[kCapacity];
+  alignas(64) double energy[kCapacity];
+  alignas(64) double fx[kCapacity], fy[kCapacity], fz[kCapacity];
+  alignas(64) double t1x[kCapacity], t1y[kCapacity], t1z[kCapacity];
+  alignas(64) double t2x[kCapacity], t2y[kCapacity], t2z[kCapacity];
+};
 
 namespace pair_driver_detail {
 
@@ -109,6 +132,76 @@ template <bool kPeriodic, bool kFilter, class K>
   }
 }
 
+// The driver of a batched kernel: as run(), but the pairs within the cutoff are gathered into a
+// per-thread PairBatch (in list order, branch-free) and evaluated a batch at a time; the results
+// are added to the thread's buffers in the same order, so the sums are the same run to run.
+template <bool kPeriodic, bool kFilter, class K>
+void run_batched(const K& k, const Elements& el, const NeighborList& list, ForceSink& sink,
+                 bool threaded) {
+  const auto& off = list.offsets();
+  const auto& nb = list.neighbors();
+  const Domain& domain = list.domain();
+  const long n = static_cast<long>(el.size());
+  const double rc2 = k.cutoff() * k.cutoff();
+#pragma omp parallel num_threads(sink.threads()) if (threaded)
+  {
+    if constexpr (requires { k.prepare(el, 0L); }) {
+#pragma omp for schedule(static)
+      for (long i = 0; i < n; ++i) k.prepare(el, i);
+    }
+    const int tid = omp_get_thread_num();
+    Vec3* __restrict f = K::kDissipative ? sink.damping_force(tid) : sink.force(tid);
+    Vec3* __restrict t = K::kDissipative ? sink.damping_torque(tid) : sink.torque(tid);
+    double energy = 0.0;
+    PairBatch b;
+    const auto flush = [&] {
+      k.batch(el, b);
+      for (int p = 0; p < b.n; ++p) {
+        const Vec3 fp(b.fx[p], b.fy[p], b.fz[p]);
+        f[b.i[p]] += fp;
+        f[b.j[p]] -= fp;
+        if constexpr (K::kTorques) {
+          t[b.i[p]] += Vec3(b.t1x[p], b.t1y[p], b.t1z[p]);
+          t[b.j[p]] += Vec3(b.t2x[p], b.t2y[p], b.t2z[p]);
+        }
+        if constexpr (!K::kDissipative) energy += b.energy[p];
+      }
+      b.n = 0;
+    };
+#pragma omp for schedule(static, 64)
+    for (long i = 0; i < n; ++i) {
+      const std::uint32_t begin = off[i], end = off[i + 1];
+      const Vec3 xi = el.x[i];
+      for (std::uint32_t m = begin; m < end; ++m) {
+        const std::uint32_t j = nb[m];
+        if constexpr (kFilter) {
+          if (k.excludes(el, i, j)) continue;
+        }
+        const Vec3 d = displacement<kPeriodic>(domain, xi, el.x[j]);
+        // Written to the next free lane, kept when within the cutoff (a NaN is kept too).
+        b.i[b.n] = static_cast<std::uint32_t>(i);
+        b.j[b.n] = j;
+        b.dx[b.n] = d.x();
+        b.dy[b.n] = d.y();
+        b.dz[b.n] = d.z();
+        b.n += !(d.squaredNorm() >= rc2);
+        if (b.n == PairBatch::kCapacity) flush();
+      }
+    }
+    if (b.n > 0) flush();
+    if constexpr (!K::kDissipative) sink.energy(tid).add(K::kTerm, energy);
+  }
+}
+
+template <bool kPeriodic, bool kFilter, class K>
+void run_any(const K& k, const Elements& el, const NeighborList& list, ForceSink& sink,
+             bool threaded) {
+  if constexpr (requires(PairBatch & b) { k.batch(el, b); }) {
+    if (k.batched()) return run_batched<kPeriodic, kFilter>(k, el, list, sink, threaded);
+  }
+  run<kPeriodic, kFilter>(k, el, list, sink, threaded);
+}
+
 }  // namespace pair_driver_detail
 
 // Adds kernel k's forces, torques and energy over the pairs of `list` to the sink. filter: test
@@ -129,14 +222,14 @@ void drive_pairs(const K& k, const Elements& el, const NeighborList& list, Force
   const bool periodic = list.domain().any_periodic();
   if (periodic) {
     if (filter)
-      run<true, true>(k, el, list, sink, threaded);
+      run_any<true, true>(k, el, list, sink, threaded);
     else
-      run<true, false>(k, el, list, sink, threaded);
+      run_any<true, false>(k, el, list, sink, threaded);
   } else {
     if (filter)
-      run<false, true>(k, el, list, sink, threaded);
+      run_any<false, true>(k, el, list, sink, threaded);
     else
-      run<false, false>(k, el, list, sink, threaded);
+      run_any<false, false>(k, el, list, sink, threaded);
   }
 }
 

@@ -41,6 +41,8 @@
 #include <cstdlib>
 #include <stdexcept>
 
+#include "force/contact/vdw_simd.h"
+
 namespace mdem {
 
 namespace {
@@ -332,7 +334,111 @@ double vdw_pair_stiffness(const VdwParams& p, const Vec3& x1, const Vec3& b1, co
   return pair_stiffness(VdwConstants(p), x2 - x1, b1, b2);
 }
 
+double vdw_separation(const VdwConstants& k, const Vec3& r, const Vec3& b1, const Vec3& b2) {
+  const double R = r.norm();
+  if (R * R < kCoincident2) return -2.0;
+  const Vec3 n = r / R;
+  double delta, dd;
+  delta_of_u(k, cos_theta2(k, b1.dot(b2), b1.dot(n), b2.dot(n)).u, delta, dd);
+  return R * k.inv_r / delta - 2.0;
+}
+
+namespace {
+
+void store(PairBatch& b, int p, const VdwPairResult& r) {
+  b.energy[p] = r.energy;
+  b.fx[p] = r.f1.x();
+  b.fy[p] = r.f1.y();
+  b.fz[p] = r.f1.z();
+  b.t1x[p] = r.t1.x();
+  b.t1y[p] = r.t1.y();
+  b.t1z[p] = r.t1.z();
+  b.t2x[p] = r.t2.x();
+  b.t2y[p] = r.t2.y();
+  b.t2z[p] = r.t2.z();
+}
+
+// Pair p of the batch by the scalar kernel (zero beyond the cutoff).
+void scalar_lane(const VdwConstants& k, const Vec3* axes, PairBatch& b, int p) {
+  VdwPairResult r;
+  eval_pair(k, Vec3(b.dx[p], b.dy[p], b.dz[p]), axes[b.i[p]], axes[b.j[p]], r);
+  store(b, p, r);
+}
+
+// The batch's pairs, with the axes of segments i, j at axes[i], axes[j]: gathered into SoA lanes
+// (padded with pairs beyond the cutoff to a whole number of vectors), evaluated by the vectorised
+// kernel; lanes with coincident centres, and parameters that need pow(), by the scalar one.
+void evaluate_batch(const VdwConstants& k, const Vec3* axes, PairBatch& b) {
+  constexpr int kCap = PairBatch::kCapacity;
+  static_assert(kCap % vdw_simd::kMaxLanes == 0);
+  if (!(k.fast_lj && k.fast_w)) {
+    for (int p = 0; p < b.n; ++p) scalar_lane(k, axes, b, p);
+    return;
+  }
+  alignas(64) double ax[kCap], ay[kCap], az[kCap], bx[kCap], by[kCap], bz[kCap];
+  for (int p = 0; p < b.n; ++p) {
+    const Vec3& a = axes[b.i[p]];
+    const Vec3& c = axes[b.j[p]];
+    ax[p] = a.x();
+    ay[p] = a.y();
+    az[p] = a.z();
+    bx[p] = c.x();
+    by[p] = c.y();
+    bz[p] = c.z();
+  }
+  const int lanes = (b.n + static_cast<int>(vdw_simd::kMaxLanes) - 1) /
+                    static_cast<int>(vdw_simd::kMaxLanes) * static_cast<int>(vdw_simd::kMaxLanes);
+  for (int p = b.n; p < lanes; ++p) {
+    b.dx[p] = 2.0 * k.p.cutoff();
+    b.dy[p] = b.dz[p] = 0.0;
+    ax[p] = bx[p] = 1.0;
+    ay[p] = az[p] = by[p] = bz[p] = 0.0;
+  }
+  const vdw_simd::Lanes l{b.dx, b.dy, b.dz, ax,    ay,    az,    bx,    by,    bz,   b.energy,
+                          b.fx, b.fy, b.fz, b.t1x, b.t1y, b.t1z, b.t2x, b.t2y, b.t2z};
+  if (!vdw_simd::evaluate(k, l, static_cast<std::size_t>(lanes))) return;
+  for (int p = 0; p < b.n; ++p)
+    if (b.dx[p] * b.dx[p] + b.dy[p] * b.dy[p] + b.dz[p] * b.dz[p] < kCoincident2)
+      scalar_lane(k, axes, b, p);
+}
+
+}  // namespace
+
+void vdw_pairs_batched(const VdwConstants& k, std::span<const Vec3> r, std::span<const Vec3> b1,
+                       std::span<const Vec3> b2, std::span<VdwPairResult> out) {
+  if (b1.size() != r.size() || b2.size() != r.size() || out.size() != r.size())
+    throw std::invalid_argument("vdw_pairs_batched: r, b1, b2 and out must have one length");
+  constexpr int kCap = PairBatch::kCapacity;
+  std::vector<Vec3> axes(2 * kCap);
+  PairBatch b;
+  for (std::size_t start = 0; start < r.size(); start += kCap) {
+    b.n = static_cast<int>(std::min<std::size_t>(kCap, r.size() - start));
+    for (int p = 0; p < b.n; ++p) {
+      axes[2 * p] = b1[start + p];
+      axes[2 * p + 1] = b2[start + p];
+      b.i[p] = static_cast<std::uint32_t>(2 * p);
+      b.j[p] = static_cast<std::uint32_t>(2 * p + 1);
+      b.dx[p] = r[start + p].x();
+      b.dy[p] = r[start + p].y();
+      b.dz[p] = r[start + p].z();
+    }
+    evaluate_batch(k, axes.data(), b);
+    for (int p = 0; p < b.n; ++p) {
+      VdwPairResult& o = out[start + p];
+      o.energy = b.energy[p];
+      o.f1 = Vec3(b.fx[p], b.fy[p], b.fz[p]);
+      o.f2 = -o.f1;
+      o.t1 = Vec3(b.t1x[p], b.t1y[p], b.t1z[p]);
+      o.t2 = Vec3(b.t2x[p], b.t2y[p], b.t2z[p]);
+    }
+  }
+}
+
+const char* vdw_simd_target() { return vdw_simd::target_name(); }
+
 void VdwKernel::prepare(const Elements& el, long i) const { axes_[i] = axis_of(el.q[i]); }
+
+void VdwKernel::batch(const Elements&, PairBatch& b) const { evaluate_batch(k_, axes_.data(), b); }
 
 bool VdwKernel::pair(const Elements&, std::size_t i, std::size_t j, const Vec3& d,
                      PairForces& out) const {

@@ -5,6 +5,7 @@
 //
 // continued linearly in D below D_min (C¹), so overlapping tubes feel a finite repulsion.
 #include <array>
+#include <span>
 #include <vector>
 
 #include "mdem/force/pair_driver.h"
@@ -90,6 +91,25 @@ struct VdwConstants {
 VdwPairResult vdw_pair(const VdwConstants& k, const Vec3& x1, const Vec3& b1, const Vec3& x2,
                        const Vec3& b2);
 
+// The pair's D = R/(r δ(θ)) − 2 as vdw_pair computes it (θ with the flip or its blend), r = x2 − x1;
+// −2 for coincident centres. For overlap tests (the tensile pre-relaxation, tensile.md §3.3).
+double vdw_separation(const VdwConstants& k, const Vec3& r, const Vec3& b1, const Vec3& b2);
+
+// How VdwKernel evaluates its pairs. Batched (the default): in batches of pairs in
+// structure-of-arrays form with SIMD, on the widest instruction set of the CPU chosen at run
+// time (vdw_simd_target()); equal to the scalar kernel to round-off, not bit for bit. Scalar:
+// one pair at a time with vdw_pair's code, the reference. Parameters with α ≠ 9.5, β ≠ 4 or a
+// W exponent ≠ 7.5 (which need pow()) are evaluated by the scalar code on either path.
+enum class VdwEvaluation { Batched, Scalar };
+
+// The batched path on its own, for tests: out[p] is pair p (r[p] = x2 − x1, axes b1[p], b2[p])
+// as the kernel's batched path evaluates it. Throws std::invalid_argument unless the four spans
+// have one length.
+void vdw_pairs_batched(const VdwConstants& k, std::span<const Vec3> r, std::span<const Vec3> b1,
+                       std::span<const Vec3> b2, std::span<VdwPairResult> out);
+// The instruction set of the batched path on this CPU (Highway's name: "AVX3", "AVX2", ...).
+const char* vdw_simd_target();
+
 // The CNT–CNT vdW pair kernel (pair_driver.h): CntSegment–CntSegment pairs outside the
 // intra-tube exclusion; the segment axes are computed once per evaluation, not once per pair.
 class VdwKernel {
@@ -98,7 +118,8 @@ class VdwKernel {
   static constexpr bool kTorques = true;
   static constexpr EnergyTerm kTerm = EnergyTerm::Vdw;
 
-  explicit VdwKernel(VdwParams p = {}) : p_(p), k_(p) {}
+  explicit VdwKernel(VdwParams p = {}, VdwEvaluation e = VdwEvaluation::Batched)
+      : p_(p), k_(p), eval_(e) {}
   std::string_view name() const { return "anisotropic_vdw"; }
   double cutoff() const { return p_.cutoff(); }
   KindPairs kinds() const {
@@ -110,6 +131,8 @@ class VdwKernel {
   void begin(const Elements& el) const { axes_.resize(el.size()); }
   void prepare(const Elements& el, long i) const;
   bool pair(const Elements& el, std::size_t i, std::size_t j, const Vec3& d, PairForces& out) const;
+  bool batched() const { return eval_ == VdwEvaluation::Batched; }
+  void batch(const Elements& el, PairBatch& b) const;
   void stiffness(const Elements& el, std::size_t i, std::size_t j, const Vec3& d,
                  StiffnessSums& s) const;
   const VdwParams& params() const { return p_; }
@@ -117,6 +140,7 @@ class VdwKernel {
  private:
   VdwParams p_;
   VdwConstants k_;
+  VdwEvaluation eval_;
   // Segment axes of the current evaluation, computed once per step rather than once per pair.
   mutable std::vector<Vec3> axes_;
 };
@@ -126,7 +150,8 @@ extern template class PairModel<VdwKernel>;
 
 class AnisotropicVdw final : public PairModel<VdwKernel> {
  public:
-  explicit AnisotropicVdw(VdwParams p = {}) : PairModel<VdwKernel>(p) {}
+  explicit AnisotropicVdw(VdwParams p = {}, VdwEvaluation e = VdwEvaluation::Batched)
+      : PairModel<VdwKernel>(p, e) {}
   const VdwParams& params() const { return k_.params(); }
 };
 
