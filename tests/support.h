@@ -112,4 +112,19 @@ inline long relax(System& sys, double tol, double ke_tol, long max_steps, long c
   return done;
 }
 
+// The change of y over the span of t along the least-squares line through (t, y): an energy
+// record's drift, free of its oscillation.
+inline double linear_trend(const std::vector<double>& t, const std::vector<double>& y) {
+  const double n = static_cast<double>(t.size());
+  double st = 0, sy = 0, stt = 0, sty = 0;
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    st += t[k];
+    sy += y[k];
+    stt += t[k] * t[k];
+    sty += t[k] * y[k];
+  }
+  const double slope = (n * sty - st * sy) / (n * stt - st * st);
+  return slope * (t.back() - t.front());
+}
+
 }  // namespace mdem::testing

@@ -28,6 +28,7 @@
 #include "mdem/integrate/system.h"
 #include "mdem/scene/nanoparticle.h"
 #include "mdem/scene/tube_builder.h"
+#include "support.h"
 
 using namespace mdem;
 
@@ -154,6 +155,25 @@ TEST(NpCntContact, CheckValuesOfModelMd) {
       EXPECT_EQ(t_np, Vec3::Zero());
     }
   }
+}
+
+TEST(NpCntContact, DashpotStiffnessIsTheSideOnCurvatureAtTheMinimum) {
+  // D0 = (αA/(βB))^{1/(α−β)} = 1.5906581 (tensile.md §2.3), R0 = ρ_NC (D0 + 2); the curvature of
+  // U along the side-on line there, by central differences of the law itself.
+  const NpCntKernel k;
+  const double R0 = 0.98623 * (1.5906581 + 2), h = 1e-4;
+  auto U = [&](double R) { return k.evaluate(Vec3(0, R, 0), Vec3::Zero(), Vec3::UnitX()).energy; };
+  const double fd = (U(R0 + h) - 2 * U(R0) + U(R0 - h)) / (h * h);
+  EXPECT_NEAR(k.equilibrium_stiffness(), fd, 1e-5 * fd);
+  EXPECT_NEAR(k.equilibrium_stiffness(), 4.4545, 1e-4);
+  EXPECT_LT(std::abs(k.evaluate(Vec3(0, R0, 0), Vec3::Zero(), Vec3::UnitX()).f1.y()), 1e-6);
+  // The dashpots take these stiffnesses and the contacts' cutoffs.
+  EXPECT_EQ(np_cnt_dashpot().params().stiffness, k.equilibrium_stiffness());
+  EXPECT_EQ(np_cnt_dashpot().params().cutoff, 4 * kT);
+  EXPECT_EQ(np_np_dashpot().params().stiffness, NpNpKernel().equilibrium_stiffness());
+  EXPECT_EQ(np_np_dashpot().params().cutoff, 8.0);
+  EXPECT_EQ(np_cnt_dashpot().owner(), "np_cnt_contact");
+  EXPECT_EQ(np_np_dashpot().owner(), "np_np_contact");
 }
 
 TEST(NpNpContact, CheckValuesOfModelMd) {
@@ -405,12 +425,13 @@ System np_scene(bool damped, std::uint64_t seed, IntegratorSettings s = {}) {
   for (const Vec3& x : {Vec3(-6, 3.6, 0), Vec3(0, 3.5, 0.8), Vec3(6, 0.5, 3.6)})
     el.add(nanoparticle(x));
   std::mt19937_64 g(seed);
-  // Segments at about 800 K (σ_v = √(kT/m)); NPs faster (≈ 0.7 eV each) so they roam their wells.
-  std::normal_distribution<double> vs(0.0, 0.05), vn(0.0, 0.02), ws(0.0, 0.07);
+  // Segments at about 800 K (σ = √(kT/m), √(kT/I)); NPs faster (≈ 0.7 eV each) so they roam
+  // their wells, and spinning slowly (no law acts on an NP's spin).
+  std::normal_distribution<double> vs(0.0, 0.05), vn(0.0, 0.02), ws(0.0, 0.07), wn(0.0, 0.005);
   for (std::size_t i = 0; i < el.size(); ++i) {
     const bool isnp = el.kind[i] == ElementKind::Nanoparticle;
     el.v[i] = isnp ? Vec3(vn(g), vn(g), vn(g)) : Vec3(vs(g), vs(g), vs(g));
-    el.w[i] = Vec3(ws(g), ws(g), ws(g));
+    el.w[i] = isnp ? Vec3(wn(g), wn(g), wn(g)) : Vec3(ws(g), ws(g), ws(g));
   }
   System sys(std::move(el), s);
   sys.add(std::move(bonds));
@@ -443,16 +464,7 @@ TEST(NpContacts, NveEnergyConservationWithNanoparticles) {
     np_np = std::min(np_np, term(sys, EnergyTerm::NpNp));
   }
   ke /= static_cast<double>(t.size());
-  const double n = static_cast<double>(t.size());
-  double st = 0, se = 0, stt = 0, ste = 0;
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    st += t[k];
-    se += e[k];
-    stt += t[k] * t[k];
-    ste += t[k] * e[k];
-  }
-  const double slope = (n * ste - st * se) / (n * stt - st * st);
-  const double drift = std::abs(slope) * (t.back() - t.front());
+  const double drift = std::abs(mdem::testing::linear_trend(t, e));
   std::printf(
       "NVE with NPs: %ld steps at dt %.2f fs, trend %.3g eV, kinetic scale %.4g eV (%.2e)\n", steps,
       sys.dt() * 1000, drift, ke, drift / ke);

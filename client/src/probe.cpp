@@ -341,6 +341,26 @@ json scan_json(const ProbeOptions& o, const NpLaw& law) {
   return out;
 }
 
+// The NP law at --x2: energy, both elements' forces and torques, the model's geometry under
+// `key`, and the --scan curve when asked for. Refused when the centres coincide or the result is
+// not finite.
+json np_result_json(const ProbeOptions& o, const NpLaw& law, const char* what, const char* key,
+                    const json& geometry) {
+  if ((o.x2 - o.x1).norm() == 0)
+    throw UsageError("--x2: the centres coincide with --x1; the NP contact needs distinct centres");
+  const PairForces r = law(o.x2);
+  if (!finite(r.f1, r.f2, r.t1, r.t2, r.energy))
+    throw std::runtime_error(std::string("the ") + what +
+                             " model returned a non-finite result at this configuration");
+  json out;
+  out["energy_eV"] = r.energy;
+  out["element1"] = element_json(o.x1, o.q1, r.f1, r.t1);
+  out["element2"] = element_json(o.x2, o.q2, r.f2, r.t2);
+  out[key] = geometry;
+  if (o.scan) out.update(scan_json(o, law));
+  return out;
+}
+
 // An NP (element 2) against a CNT segment or a straight tube (element 1) (model.md §5).
 json probe_np_cnt(const ProbeOptions& o) {
   NpCntParams p;
@@ -364,16 +384,6 @@ json probe_np_cnt(const ProbeOptions& o) {
     }
     return sum;
   };
-  if ((o.x2 - o.x1).norm() == 0)
-    throw UsageError("--x2: the centres coincide with --x1; the NP contact needs distinct centres");
-  const PairForces r = law(o.x2);
-  if (!finite(r.f1, r.f2, r.t1, r.t2, r.energy))
-    throw std::runtime_error("the NP-CNT model returned a non-finite result at this configuration");
-
-  json out;
-  out["energy_eV"] = r.energy;
-  out["element1"] = element_json(o.x1, o.q1, r.f1, r.t1);
-  out["element2"] = element_json(o.x2, o.q2, r.f2, r.t2);
   const Vec3 d = o.x2 - o.x1;
   const double R = d.norm();
   const double c = std::abs(b.dot(d / R));
@@ -391,9 +401,7 @@ json probe_np_cnt(const ProbeOptions& o) {
   g["cutoff_nm"] = p.cutoff();
   g["within_cutoff"] = R < p.cutoff();
   if (o.tube > 0) g["tube_segments"] = o.tube;
-  out["np_cnt"] = g;
-  if (o.scan) out.update(scan_json(o, law));
-  return out;
+  return np_result_json(o, law, "NP-CNT", "np_cnt", g);
 }
 
 // Two nanoparticles (model.md §5).
@@ -407,15 +415,6 @@ json probe_np_np(const ProbeOptions& o) {
     return r;
   };
   const double R = (o.x2 - o.x1).norm();
-  if (R == 0)
-    throw UsageError("--x2: the centres coincide with --x1; the NP contact needs distinct centres");
-  const PairForces r = law(o.x2);
-  if (!finite(r.f1, r.f2, r.t1, r.t2, r.energy))
-    throw std::runtime_error("the NP-NP model returned a non-finite result at this configuration");
-  json out;
-  out["energy_eV"] = r.energy;
-  out["element1"] = element_json(o.x1, o.q1, r.f1, r.t1);
-  out["element2"] = element_json(o.x2, o.q2, r.f2, r.t2);
   json g;
   g["R_nm"] = R;
   g["gap_nm"] = R - 2.0 * p.radius;
@@ -423,9 +422,7 @@ json probe_np_np(const ProbeOptions& o) {
   g["epsilon_eV"] = p.epsilon;
   g["cutoff_nm"] = p.cutoff();
   g["within_cutoff"] = R < p.cutoff();
-  out["np_np"] = g;
-  if (o.scan) out.update(scan_json(o, law));
-  return out;
+  return np_result_json(o, law, "NP-NP", "np_np", g);
 }
 
 json probe_model(const ProbeOptions& o) {
