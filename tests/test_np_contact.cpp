@@ -408,6 +408,17 @@ TEST(NpCntContact, NpBesideA201SegmentTubeRestsAt3462) {
   // no force.
   EXPECT_NEAR(term(sys, EnergyTerm::NpCnt), U, 1e-12);
   EXPECT_LT(sys.elements().f[inp].norm(), 1e-4);
+  // The energy profile U(h) beside the tube (NP in the plane of a segment centre) of tensile.md
+  // §2.4, computed there with the printed ε0 = 0.005407 eV: U is proportional to ε0, so ten times
+  // those values (7 digits).
+  const double profile[][2] = {{3.0, 1.5071322},  {3.2, 0.0320042},  {3.3, -0.1260430},
+                               {3.4, -0.1754986}, {3.5, -0.1796287}, {3.6, -0.1659486},
+                               {3.8, -0.1257179}, {4.0, -0.0880996}, {4.5, -0.0247773},
+                               {5.0, -0.0029115}};
+  for (const auto& row : profile)
+    EXPECT_NEAR(energy_at(row[0]), 10 * row[1], 10 * 6e-8) << "h = " << row[0];
+  EXPECT_EQ(energy_at(5.5), 0.0);
+  energy_at(h);
   // The NP's sub-list holds at least every segment within 4T of it.
   const auto in_reach =
       static_cast<std::size_t>(std::floor(std::sqrt(std::pow(4 * kT, 2) - h * h) / kT));
@@ -602,6 +613,18 @@ TEST(NpProbe, NpCntCurveBesideATubeHasItsMinimumAt3462) {
   EXPECT_NEAR(at, 3.462, 0.001);
   EXPECT_NEAR(j["minimum"]["R_nm"].get<double>(), 3.462, 0.001);
   expect_rel(best, -1.811767, 1e-4, "curve minimum");
+}
+
+TEST(NpProbe, PrintedEpsilonIsAParameter) {
+  // ε0 = 0.005407 eV, the thesis's printed value: the same rest distance, a tenth of the depth
+  // (tensile.md §2.4: −0.1811767 eV).
+  const ProbeRun r = probe({"--model", "np-cnt", "--x2", "0,3.5,0", "--tube", "201", "--scan",
+                            "3.3:3.7:41", "--epsilon", "0.005407"});
+  ASSERT_EQ(r.code, cli::kOk) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["np_cnt"]["epsilon_eV"].get<double>(), 0.005407);
+  EXPECT_NEAR(j["minimum"]["R_nm"].get<double>(), 3.462002, 1e-6);
+  expect_rel(j["minimum"]["energy_eV"].get<double>(), -0.1811767, 1e-6, "printed-eps depth");
 }
 
 TEST(NpProbe, SinglePairsMatchTheCheckValues) {
