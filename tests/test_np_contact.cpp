@@ -343,6 +343,62 @@ TEST(NpNpContact, CentralGradientAndContinuity) {
   EXPECT_NEAR(lo.f2.x(), hi.f2.x(), 1e-3);
 }
 
+TEST(NpContacts, StiffnessBoundsCoverTheCurvature) {
+  // The critical-step bounds are at least the curvature of U along the centre line (central
+  // differences of the law), for both kernels over their whole reach, linear branches included;
+  // the NP gets no rotational stiffness.
+  std::mt19937_64 g(31);
+  const NpCntKernel kc;
+  const NpNpKernel kn;
+  const double h = 1e-4;
+  for (int s = 0; s < 200; ++s) {
+    const Vec3 n = random_unit(g), axis = random_unit(g);
+    {
+      const double R = std::uniform_real_distribution<double>(1.5, 4 * kT - 2 * h)(g);
+      const Elements el = np_and_segment(R * n, Vec3::Zero(), axis, s % 2 == 0);
+      const std::size_t inp = s % 2 == 0 ? 0 : 1;
+      StiffnessSums sums;
+      sums.reset(2);
+      kc.stiffness(el, 0, 1, el.x[1] - el.x[0], sums);
+      auto U = [&](double r) { return kc.evaluate(r * n, Vec3::Zero(), axis).energy; };
+      const double curv = std::abs(U(R + h) - 2 * U(R) + U(R - h)) / (h * h);
+      EXPECT_GE(sums.kt[0], curv * (1 - 1e-4)) << "NP-CNT at R = " << R;
+      EXPECT_EQ(sums.kt[0], sums.kt[1]);
+      EXPECT_EQ(sums.kr[inp], 0.0);
+      EXPECT_GE(sums.kr[1 - inp], 0.0);
+    }
+    {
+      const double R = std::uniform_real_distribution<double>(4.5, 8.0 - 2 * h)(g);
+      Elements el;
+      el.add(nanoparticle(Vec3::Zero()));
+      el.add(nanoparticle(R * n));
+      StiffnessSums sums;
+      sums.reset(2);
+      kn.stiffness(el, 0, 1, el.x[1] - el.x[0], sums);
+      const double curv =
+          std::abs(kn.energy(R + h) - 2 * kn.energy(R) + kn.energy(R - h)) / (h * h);
+      EXPECT_GE(sums.kt[0], curv * (1 - 1e-4)) << "NP-NP at R = " << R;
+      EXPECT_EQ(sums.kr[0] + sums.kr[1], 0.0);
+    }
+  }
+  // A system of NPs and a tube gets a finite critical step from them.
+  System sys = [] {
+    Elements el;
+    el.add(nanoparticle(Vec3::Zero()));
+    el.add(nanoparticle(Vec3(5.3, 0, 0)));
+    el.add(cnt_segment(Vec3(0, 3.0, 0), Quat::Identity(), 0, 0));
+    System s(std::move(el));
+    s.add(std::make_unique<NpCntContact>());
+    s.add(std::make_unique<NpNpContact>());
+    s.initialize();
+    return s;
+  }();
+  EXPECT_TRUE(std::isfinite(sys.critical_dt()));
+  std::printf("critical step of 2 NPs and a segment in contact: %.1f fs\n",
+              sys.critical_dt() * 1000);
+  EXPECT_GT(sys.critical_dt(), 0.03);  // above the CNT bonds' (the thesis ran 30 fs)
+}
+
 TEST(NpContacts, BadParametersAreRefusedNamingTheParameter) {
   auto message = [](auto make) {
     try {
