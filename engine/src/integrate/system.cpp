@@ -242,13 +242,24 @@ void System::initialize() {
   }
 
   update_kinetic();
+  start_ledger();
+  initialized_ = true;
+}
+
+void System::start_ledger() {
   ledger_.initial_total = ledger_.total();
   ledger_.external_work = 0;
   ledger_.dissipated = 0;
   initial_kinetic_ = ledger_.kinetic();
   initial_stored_ = ledger_.potential.total_stored();
   energy_scale_ = initial_kinetic_;
-  initialized_ = true;
+}
+
+void System::restart_clock() {
+  refresh();
+  time_ = 0;
+  steps_ = 0;
+  start_ledger();
 }
 
 void System::refresh() {

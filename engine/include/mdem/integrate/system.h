@@ -171,6 +171,11 @@ class System {
   // energy it makes is booked as external work (the work of switching), so the energy balance
   // stays closed and the guard does not read it as an instability.
   void refresh_booking_work();
+  // Clock and step count back to 0 and the energy ledger restarted from the current state (no
+  // work done, nothing dissipated yet), after a refresh() at the current state: the end of a
+  // pre-relaxation (tensile.md §3.3), whose velocities the caller zeroes first. Initializes first
+  // if needed.
+  void restart_clock();
   // Critical step of the current configuration (does not change dt).
   double compute_critical_dt() const;
 
@@ -180,6 +185,7 @@ class System {
   void check_finite_forces() const;
   void check_energy_growth();
   void update_energy_scale();
+  void start_ledger();  // the ledger's origin at the current state
 
   Elements el_;
   IntegratorSettings settings_;

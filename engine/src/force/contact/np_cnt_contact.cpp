@@ -67,6 +67,15 @@ bool NpCntKernel::law(const Vec3& d, const Vec3& b, double& energy, Vec3& f_np, 
   return true;
 }
 
+double NpCntKernel::separation(const Vec3& x_np, const Vec3& x_seg, const Vec3& b) const {
+  const Vec3 d = x_np - x_seg;
+  const double R2 = d.squaredNorm();
+  if (R2 < kCoincident2) return -2.0;
+  const double R = std::sqrt(R2);
+  const double c = b.dot(d) / R;
+  return R / (p_.rho * delta_(c * c)) - 2.0;
+}
+
 PairForces NpCntKernel::evaluate(const Vec3& x_np, const Vec3& x_seg, const Vec3& b) const {
   PairForces r;
   if (law(x_np - x_seg, b, r.energy, r.f1, r.t2)) r.f2 = -r.f1;

@@ -60,6 +60,8 @@ class NpCntKernel {
   // (f1), on the segment (f2) and the segment's torque (t2); t1 (the NP's) is zero. Zero beyond
   // the cutoff. Coincident centres (R < 1e-12 nm) give U = f_c·V(−2) with no force or torque.
   PairForces evaluate(const Vec3& x_np, const Vec3& x_seg, const Vec3& b) const;
+  // The law's D = R/(ρ_NC δ(θ)) − 2 for that pair (−2 for coincident centres): overlap tests.
+  double separation(const Vec3& x_np, const Vec3& x_seg, const Vec3& b) const;
 
   // Curvature ∂²U/∂R² of the side-on law (θ = 90°) at its minimum D0 = (αA/(βB))^{1/(α−β)}, R0 =
   // ρ_NC (D0 + 2) (3.541 nm with the defaults, where f_c = 1): V''(D0)/ρ_NC² (eV/nm²).

@@ -61,6 +61,8 @@ class NpNpKernel {
   double equilibrium_stiffness() const;
   // R0 = r_NP (D0 + 2), the centre distance of the pair's minimum while f_c = 1 there (nm).
   double equilibrium_distance() const;
+  // The law's D = R/r_NP − 2 at centre distance R: overlap tests.
+  double separation(double R) const { return R / p_.radius - 2.0; }
 
  private:
   NpNpParams p_;
