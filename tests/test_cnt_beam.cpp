@@ -28,8 +28,8 @@ struct Cantilever {
 
 Cantilever make_cantilever(int n) {
   Elements el;
-  auto bonds = std::make_unique<ParallelBond>();
-  add_straight_tube(el, bonds.get(), Vec3::Zero(), Vec3::UnitX(), n, 0);
+  add_straight_tube(el, Vec3::Zero(), Vec3::UnitX(), n, 0);
+  auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
   el.fix_all(0);
   IntegratorSettings s;
   s.local_damping = 0.7;

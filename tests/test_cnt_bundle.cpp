@@ -42,9 +42,9 @@ double mean_axis_distance(const Elements& el, int n) {
 TEST(CntBundle, TwoParallelTubesSettleAtTheVdwSpacing) {
   const int n = 20;
   Elements el;
-  auto bonds = std::make_unique<ParallelBond>();
-  add_straight_tube(el, bonds.get(), Vec3::Zero(), Vec3::UnitX(), n, 0);
-  add_straight_tube(el, bonds.get(), Vec3(0, 2.0, 0), Vec3::UnitX(), n, 1);
+  add_straight_tube(el, Vec3::Zero(), Vec3::UnitX(), n, 0);
+  add_straight_tube(el, Vec3(0, 2.0, 0), Vec3::UnitX(), n, 1);
+  auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
   IntegratorSettings s;
   s.local_damping = 0.7;
   System sys = make_system(std::move(el), std::move(bonds), s);
@@ -64,9 +64,9 @@ TEST(CntBundle, SlidingATubeAlongAnotherBarelyChangesTheEnergy) {
   // spacing, far from its ends: the energy may only show the segment corrugation, < 1 % of the
   // adhesion.
   Elements el;
-  auto bonds = std::make_unique<ParallelBond>();
-  add_straight_tube(el, bonds.get(), Vec3::Zero(), Vec3::UnitX(), 60, 0);
-  add_straight_tube(el, bonds.get(), Vec3(25 * kT, 1.72, 0), Vec3::UnitX(), 10, 1);
+  add_straight_tube(el, Vec3::Zero(), Vec3::UnitX(), 60, 0);
+  add_straight_tube(el, Vec3(25 * kT, 1.72, 0), Vec3::UnitX(), 10, 1);
+  auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
   System sys = make_system(std::move(el), std::move(bonds));
   sys.initialize();
   double lo = 1e300, hi = -1e300;
@@ -176,10 +176,10 @@ TEST(CntBundle, TubesGeneratedThroughEachOtherGiveFiniteForces) {
   // Two tubes crossing at right angles through the same point, and a third lying inside the
   // first: the C¹ continuation below D = 0.4 pushes them apart with finite forces.
   Elements el;
-  auto bonds = std::make_unique<ParallelBond>();
-  add_straight_tube(el, bonds.get(), Vec3(-10 * kT, 0, 0), Vec3::UnitX(), 21, 0);
-  add_straight_tube(el, bonds.get(), Vec3(0, -10 * kT, 0), Vec3::UnitY(), 21, 1);
-  add_straight_tube(el, bonds.get(), Vec3(-5 * kT, 0.05, 0.0), Vec3::UnitX(), 10, 2);
+  add_straight_tube(el, Vec3(-10 * kT, 0, 0), Vec3::UnitX(), 21, 0);
+  add_straight_tube(el, Vec3(0, -10 * kT, 0), Vec3::UnitY(), 21, 1);
+  add_straight_tube(el, Vec3(-5 * kT, 0.05, 0.0), Vec3::UnitX(), 10, 2);
+  auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
   IntegratorSettings s;
   s.local_damping = 0.7;
   System sys = make_system(std::move(el), std::move(bonds), s);

@@ -127,7 +127,7 @@ TEST(Domain, BadBoxesAreRefusedWithTheReason) {
   EXPECT_NO_THROW(NeighborList(5.424, 0.05, small));  // 2·5.474 ≤ 11
 
   Elements el;
-  add_straight_tube(el, nullptr, Vec3(1, 1, 1), Vec3::UnitY(), 3, 0);
+  add_straight_tube(el, Vec3(1, 1, 1), Vec3::UnitY(), 3, 0);
   System sys(std::move(el));
   sys.add(std::make_unique<AnisotropicVdw>());
   sys.set_domain(small);
@@ -220,10 +220,10 @@ TEST(Domain, TubePairDriftingThroughAPeriodicBoundaryConservesEnergy) {
   const double L = 16;
   const int n = 12;
   Elements el;
-  auto bonds = std::make_unique<ParallelBond>();
   // Tubes along y at x = 0.6 and x = L − 1.2 (1.8 nm apart through the boundary).
-  add_straight_tube(el, bonds.get(), Vec3(0.6, 0, 0), Vec3::UnitY(), n, 0);
-  add_straight_tube(el, bonds.get(), Vec3(L - 1.2, 0.3, 0.1), Vec3::UnitY(), n, 1);
+  add_straight_tube(el, Vec3(0.6, 0, 0), Vec3::UnitY(), n, 0);
+  add_straight_tube(el, Vec3(L - 1.2, 0.3, 0.1), Vec3::UnitY(), n, 1);
+  auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
   std::mt19937_64 g(5);
   std::normal_distribution<double> thermal(0.0, 0.3);
   for (std::size_t i = 0; i < el.size(); ++i) {
@@ -258,9 +258,9 @@ TEST(Domain, TubePairDriftingThroughAPeriodicBoundaryConservesEnergy) {
 TEST(Domain, WrappedPositionsGiveTheSameForcesAsUnwrapped) {
   const double L = 18;
   Elements el;
-  auto bonds = std::make_unique<ParallelBond>();
-  add_straight_tube(el, bonds.get(), Vec3(L - 4, 1, 1), Vec3(1, 0.02, 0).normalized(), 6, 0);
-  add_straight_tube(el, bonds.get(), Vec3(L - 5, 2.75, 1.1), Vec3(1, 0, 0.02).normalized(), 6, 1);
+  add_straight_tube(el, Vec3(L - 4, 1, 1), Vec3(1, 0.02, 0).normalized(), 6, 0);
+  add_straight_tube(el, Vec3(L - 5, 2.75, 1.1), Vec3(1, 0, 0.02).normalized(), 6, 1);
+  auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
   std::mt19937_64 g(9);
   std::normal_distribution<double> jiggle(0.0, 0.01);
   for (std::size_t i = 0; i < el.size(); ++i) {

@@ -30,7 +30,7 @@ RopeSpec small_rope() {
 
 TEST(Tags, AreZeroToNMinusOneAfterBuildingARope) {
   Elements el;
-  build_hex_rope(el, nullptr, small_rope());
+  build_hex_rope(el, small_rope());
   ASSERT_EQ(el.tag.size(), el.size());
   for (std::size_t i = 0; i < el.size(); ++i) {
     EXPECT_EQ(el.tag[i], i);
@@ -42,7 +42,7 @@ TEST(Tags, AreZeroToNMinusOneAfterBuildingARope) {
 
 TEST(Tags, IndexOfFollowsAReordering) {
   Elements el;
-  build_hex_rope(el, nullptr, small_rope());
+  build_hex_rope(el, small_rope());
   // Swap the tags of two elements, as a reordering of the arrays would carry them.
   std::swap(el.tag[3], el.tag[40]);
   EXPECT_EQ(el.index_of(3), 40u);
@@ -116,7 +116,7 @@ TEST(Groups, HoldSortedTagsAndNameTheKnownGroupsWhenOneIsMissing) {
 TEST(Groups, RopeGripsHoldExactlyTheEndSegmentsOfEveryTube) {
   Elements el;
   const RopeSpec spec = small_rope();
-  const Rope rope = build_hex_rope(el, nullptr, spec);
+  const Rope rope = build_hex_rope(el, spec);
   const int n = spec.segments;
   for (std::string_view name : {kRopeGripA, kRopeGripB}) {
     const std::vector<std::size_t> grip = el.group_indices(name);

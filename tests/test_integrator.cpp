@@ -28,8 +28,8 @@ ElementInit body(const Vec3& x, double mass, const Vec3& inertia) {
 // Two bonded CNT segments along x.
 System two_segments(IntegratorSettings s = {}) {
   Elements el;
-  auto bonds = std::make_unique<ParallelBond>();
-  add_straight_tube(el, bonds.get(), Vec3::Zero(), Vec3::UnitX(), 2, 0);
+  add_straight_tube(el, Vec3::Zero(), Vec3::UnitX(), 2, 0);
+  auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
   System sys(std::move(el), s);
   sys.add(std::move(bonds));
   return sys;
@@ -119,8 +119,8 @@ TEST(Integrator, CriticalStepOfAChainBracketsTheExactLimit) {
   // √(m/k) (63.7 fs for the CNT bond); the bound must not exceed the exact limit of the
   // stiffest mode and must not be absurdly conservative.
   Elements el;
-  auto bonds = std::make_unique<ParallelBond>();
-  add_straight_tube(el, bonds.get(), Vec3::Zero(), Vec3::UnitX(), 30, 0);
+  add_straight_tube(el, Vec3::Zero(), Vec3::UnitX(), 30, 0);
+  auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
   System sys(std::move(el));
   sys.add(std::move(bonds));
   sys.initialize();
@@ -137,8 +137,8 @@ TEST(Integrator, AutoStepRunsStablyJustBelowTheTrueLimit) {
   // At safety 0.95 of the bound, a chain with random velocities must stay bounded: the bound is
   // conservative. The exact limit itself is where the energy would run away.
   Elements el;
-  auto bonds = std::make_unique<ParallelBond>();
-  add_straight_tube(el, bonds.get(), Vec3::Zero(), Vec3::UnitX(), 30, 0);
+  add_straight_tube(el, Vec3::Zero(), Vec3::UnitX(), 30, 0);
+  auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
   std::mt19937 rng(3);
   std::normal_distribution<double> g(0.0, 0.05);
   for (std::size_t i = 0; i < el.size(); ++i) {
@@ -264,8 +264,8 @@ TEST(Integrator, GuardStopsARunThatGoesUnstableAndNamesStepAndElement) {
   // Stiffen the bond a million-fold after the step was fixed: the integration must blow up, and
   // the guard must stop it with a message, before anything non-finite is produced.
   Elements el;
-  auto bonds = std::make_unique<ParallelBond>();
-  add_straight_tube(el, bonds.get(), Vec3::Zero(), Vec3::UnitX(), 10, 0);
+  add_straight_tube(el, Vec3::Zero(), Vec3::UnitX(), 10, 0);
+  auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
   el.v[5] = Vec3(0.01, 0.02, 0);
   System sys(std::move(el));
   ParallelBond* b = sys.add(std::move(bonds));
@@ -311,8 +311,8 @@ TEST(Integrator, FixedAndPrescribedDofsMoveAsTold) {
 TEST(Integrator, EnergyBalanceClosesWithLocalDampingAndExternalWork) {
   // A tube pulled by a constant end force under local damping: W_ext = ΔU + ΔK + E_dissipated.
   Elements el;
-  auto bonds = std::make_unique<ParallelBond>();
-  add_straight_tube(el, bonds.get(), Vec3::Zero(), Vec3::UnitX(), 10, 0);
+  add_straight_tube(el, Vec3::Zero(), Vec3::UnitX(), 10, 0);
+  auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
   el.fix_all(0);
   el.f_ext[9] = Vec3(0.5, 0.2, 0.0);
   IntegratorSettings s;

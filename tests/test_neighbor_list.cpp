@@ -116,7 +116,7 @@ Elements small_film(unsigned seed, int tubes = 40, int segments = 30, double sid
   s.tubes = tubes;
   s.segments_per_tube = segments;
   s.seed = seed;
-  add_random_film(el, nullptr, s);
+  add_random_film(el, s);
   return el;
 }
 
@@ -231,7 +231,7 @@ TEST(NeighborList, ExclusionIsRespected) {
   // Straight tube: every pair within range is on one tube within 20 indices, so the vdW-style
   // exclusion empties the list; an "exclude odd i" rule keeps exactly the pairs with even i.
   Elements el;
-  add_straight_tube(el, nullptr, Vec3::Zero(), Vec3::UnitX(), 60, 0);
+  add_straight_tube(el, Vec3::Zero(), Vec3::UnitX(), 60, 0);
   NeighborList nl(kCutoff, kSkin);
   nl.build(el);
   EXPECT_GT(nl.pair_count(), 0u);
@@ -397,7 +397,7 @@ TEST(NeighborList, LargeFilmBuildsQuickly) {
   s.tubes = 500;
   s.segments_per_tube = 100;
   s.seed = 1;
-  add_random_film(el, nullptr, s);
+  add_random_film(el, s);
   NeighborList nl(kCutoff, kSkin);
   nl.set_exclusion(same_tube_close);
   nl.build(el);  // warm-up: buffers reach their size
@@ -436,10 +436,11 @@ TEST(FilmBuilder, GeometryFollowsTheSpec) {
   s.segments_per_tube = 37;
   s.seed = 2024;
   Elements el;
-  // One tube already present: the film's ids continue after it.
-  add_straight_tube(el, nullptr, Vec3(0, 0, 50), Vec3::UnitX(), 3, 4);
-  auto bonds = std::make_unique<ParallelBond>();
-  const TubeIndices tubes = add_random_film(el, bonds.get(), s);
+  // One tube already present (unbonded): the film's ids continue after it.
+  for (int k = 0; k < 3; ++k)
+    el.add(cnt_segment(Vec3(k * cnt::kSegmentLength, 0, 50), Quat::Identity(), 4, k));
+  const TubeIndices tubes = add_random_film(el, s);
+  auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
 
   ASSERT_EQ(tubes.size(), 120u);
   EXPECT_EQ(el.size(), 3u + 120u * 37u);
@@ -489,29 +490,29 @@ TEST(FilmBuilder, FlatFilmAndBadSpecs) {
   s.thickness = 0;
   s.seed = 1;
   Elements el;
-  add_random_film(el, nullptr, s);
+  add_random_film(el, s);
   for (std::size_t i = 0; i < el.size(); ++i) {
     EXPECT_EQ(el.x[i].z(), 0.0);
     EXPECT_NEAR(el.axis(i).z(), 0.0, 1e-15);
   }
   FilmSpec bad = s;
   bad.side = 0;
-  EXPECT_THROW(add_random_film(el, nullptr, bad), std::invalid_argument);
+  EXPECT_THROW(add_random_film(el, bad), std::invalid_argument);
   bad = s;
   bad.tubes = 0;
-  EXPECT_THROW(add_random_film(el, nullptr, bad), std::invalid_argument);
+  EXPECT_THROW(add_random_film(el, bad), std::invalid_argument);
   bad = s;
   bad.segments_per_tube = 0;
-  EXPECT_THROW(add_random_film(el, nullptr, bad), std::invalid_argument);
+  EXPECT_THROW(add_random_film(el, bad), std::invalid_argument);
   bad = s;
   bad.max_out_of_plane_deg = -1;
-  EXPECT_THROW(add_random_film(el, nullptr, bad), std::invalid_argument);
+  EXPECT_THROW(add_random_film(el, bad), std::invalid_argument);
 }
 
 TEST(FilmBuilder, SevenTubeBundleIsATriangularLattice) {
   Elements el;
-  auto bonds = std::make_unique<ParallelBond>();
-  const TubeIndices tubes = add_seven_tube_bundle(el, bonds.get(), 12, 1.7);
+  const TubeIndices tubes = add_seven_tube_bundle(el, 12, 1.7);
+  auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
   ASSERT_EQ(tubes.size(), 7u);
   EXPECT_EQ(el.size(), 7u * 12u);
   EXPECT_EQ(bonds->bonds().size(), 7u * 11u);
@@ -532,6 +533,6 @@ TEST(FilmBuilder, SevenTubeBundleIsATriangularLattice) {
     const std::size_t next = t == 6 ? 1 : t + 1;
     EXPECT_NEAR((yz(t) - yz(next)).norm(), 1.7, 1e-12);
   }
-  EXPECT_THROW(add_seven_tube_bundle(el, nullptr, 0, 1.7), std::invalid_argument);
-  EXPECT_THROW(add_seven_tube_bundle(el, nullptr, 5, 0.0), std::invalid_argument);
+  EXPECT_THROW(add_seven_tube_bundle(el, 0, 1.7), std::invalid_argument);
+  EXPECT_THROW(add_seven_tube_bundle(el, 5, 0.0), std::invalid_argument);
 }

@@ -73,9 +73,9 @@ constexpr double kSkin = 0.5;
 // the tubes, everything moving.
 Elements scene() {
   Elements el;
-  add_straight_tube(el, nullptr, Vec3(0, 0, 0), Vec3::UnitX(), 20, 0);
-  add_straight_tube(el, nullptr, Vec3(0, 1.75, 0), Vec3::UnitX(), 20, 1);
-  add_straight_tube(el, nullptr, Vec3(14, -8, 1.7), Vec3::UnitY(), 20, 2);
+  add_straight_tube(el, Vec3(0, 0, 0), Vec3::UnitX(), 20, 0);
+  add_straight_tube(el, Vec3(0, 1.75, 0), Vec3::UnitX(), 20, 1);
+  add_straight_tube(el, Vec3(14, -8, 1.7), Vec3::UnitY(), 20, 2);
   for (const Vec3& x : {Vec3(5, -4, 0), Vec3(10, 5.8, 0), Vec3(20, 0.9, 4.2), Vec3(14, 8, -3.5)}) {
     ElementInit e;
     e.kind = ElementKind::Nanoparticle;

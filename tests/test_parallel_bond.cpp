@@ -432,11 +432,11 @@ TEST(ParallelBond, MakeBondValidation) {
 
 TEST(ParallelBond, ComputeOnTubeMatchesBondSum) {
   Elements el;
-  ParallelBond pb;
   // Long enough that the loop runs threaded (more bonds than kParallelMinItems).
   const int segments = static_cast<int>(kParallelMinItems) + 11;
   const std::vector<std::size_t> ids =
-      add_straight_tube(el, &pb, Vec3(1, -2, 0.5), Vec3(1, 1, 0.3), segments, 0);
+      add_straight_tube(el, Vec3(1, -2, 0.5), Vec3(1, 1, 0.3), segments, 0);
+  const ParallelBond pb = *ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
   ASSERT_EQ(ids.size(), static_cast<std::size_t>(segments));
   ASSERT_EQ(pb.bonds().size(), static_cast<std::size_t>(segments - 1));
   std::mt19937_64 rng(5);

@@ -8,6 +8,7 @@
 
 #include "mdem/core/cnt.h"
 #include "mdem/core/units.h"
+#include "mdem/force/bond/parallel_bond.h"
 #include "mdem/integrate/system.h"
 #include "mdem/observe/rope_observables.h"
 #include "mdem/protocol/twist_protocol.h"
@@ -79,13 +80,13 @@ TEST(HexLattice, EquilibriumSpacingMinimisesTheLatticeEnergy) {
 
 TEST(HexRope, BuildsTubesGripsAndInternalSites) {
   Elements el;
-  ParallelBond bonds;
   RopeSpec spec;
   spec.layers = 4;
   spec.segments = 20;
   spec.spacing = 1.72;
   spec.grip_segments = 2;
-  const Rope rope = build_hex_rope(el, &bonds, spec);
+  const Rope rope = build_hex_rope(el, spec);
+  const ParallelBond bonds = *ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
   EXPECT_EQ(rope.tubes.size(), 37u);
   EXPECT_EQ(el.size(), 37u * 20);
   EXPECT_EQ(bonds.bonds().size(), 37u * 19);
@@ -124,7 +125,7 @@ TEST(HexRope, PointAndLineDefectsRemoveTheRightTubes) {
   spec.spacing = 1.72;
   spec.missing = {0, 7};
   spec.lines = {{180.0, 1, 0.5}};  // a short line defect: the middle half of 6 tubes
-  const Rope rope = build_hex_rope(el, nullptr, spec);
+  const Rope rope = build_hex_rope(el, spec);
   // 91 sites − 2 missing; the 6 row sites each hold two tubes (one per end), but site 0 is
   // missing already: 89 + 5 extra tubes.
   EXPECT_EQ(rope.tubes.size(), 89u + 5u);
@@ -133,12 +134,10 @@ TEST(HexRope, PointAndLineDefectsRemoveTheRightTubes) {
   EXPECT_FALSE(rope.internal[0]);
   EXPECT_FALSE(rope.internal[7]);
   for (int nb : L.neighbors[7]) EXPECT_FALSE(rope.internal[nb]);
-  EXPECT_THROW(build_hex_rope(el, nullptr, RopeSpec{6, 20, 1.72, {91}, {}, 1}),
+  EXPECT_THROW(build_hex_rope(el, RopeSpec{6, 20, 1.72, {91}, {}, 1}), std::invalid_argument);
+  EXPECT_THROW(build_hex_rope(el, RopeSpec{2, 20, 1.72, {0, 1, 2, 3, 4, 5, 6}, {}, 1}),
                std::invalid_argument);
-  EXPECT_THROW(build_hex_rope(el, nullptr, RopeSpec{2, 20, 1.72, {0, 1, 2, 3, 4, 5, 6}, {}, 1}),
-               std::invalid_argument);
-  EXPECT_THROW(build_hex_rope(el, nullptr, RopeSpec{3, 20, 1.72, {}, {}, 11}),
-               std::invalid_argument);
+  EXPECT_THROW(build_hex_rope(el, RopeSpec{3, 20, 1.72, {}, {}, 11}), std::invalid_argument);
 }
 
 // A cross-section as straight tubes through the given in-plane points.
@@ -224,7 +223,7 @@ System rope_system(Rope& rope, int layers, int segments) {
   spec.layers = layers;
   spec.segments = segments;
   spec.spacing = 1.72;
-  rope = build_hex_rope(el, nullptr, spec);
+  rope = build_hex_rope(el, spec);
   return System(std::move(el));
 }
 

@@ -1,5 +1,8 @@
 // System checkpoints (System::save_state / load_state).
 #include <cstring>
+#include <stdexcept>
+#include <string>
+#include <utility>
 
 #include "mdem/integrate/system.h"
 #include "mdem/io/state_io.h"
@@ -76,6 +79,94 @@ void load_elements(StateReader& r, Elements& el) {
   expect_same(r, el.tag, "tag");
 }
 
+// Topology and groups are saved whole and loaded in place of the job's: a resumed job has the
+// bonds, rings (and so the intra-tube exclusions) and groups of the checkpoint. The loaded ones
+// are re-validated against the elements.
+void save_topology(StateWriter& w, const Topology& t) {
+  w.begin("topology");
+  std::vector<std::uint64_t> a, b;
+  std::vector<std::uint8_t> type;
+  for (const TopologyBond& bond : t.bonds()) {
+    a.push_back(bond.a);
+    b.push_back(bond.b);
+    type.push_back(static_cast<std::uint8_t>(bond.type));
+  }
+  w.put(a);
+  w.put(b);
+  w.put(type);
+  w.put(static_cast<std::uint64_t>(t.chains().size()));
+  for (const Chain& c : t.chains()) {
+    w.put(c.tube);
+    w.put(c.parent);
+    w.put(c.closed);
+    w.put(c.tags);
+  }
+}
+
+void load_topology(StateReader& r, Elements& el) {
+  r.begin("topology");
+  std::vector<std::uint64_t> a, b;
+  std::vector<std::uint8_t> type;
+  r.get(a, "bond first tags");
+  r.get(b, "bond second tags", a.size());
+  r.get(type, "bond types", a.size());
+  Topology t;
+  try {
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      if (type[k] >= kBondTypeCount)
+        r.fail("bond types", "holds an unknown bond type " + std::to_string(type[k]));
+      t.add_bond(el, a[k], b[k], static_cast<BondType>(type[k]));
+    }
+  } catch (const std::invalid_argument& e) {
+    r.fail("bonds", e.what());
+  }
+  const auto n_chains = r.get<std::uint64_t>("chain count");
+  for (std::uint64_t k = 0; k < n_chains; ++k) {
+    Chain c;
+    c.tube = r.get<std::int32_t>("chain tube");
+    c.parent = r.get<std::int32_t>("chain parent");
+    c.closed = r.get_bool("chain closed");
+    r.get(c.tags, "chain tags");
+    try {
+      t.add_chain(el, std::move(c));
+    } catch (const std::invalid_argument& e) {
+      r.fail("chains", e.what());
+    }
+  }
+  el.topology = std::move(t);
+}
+
+void save_groups(StateWriter& w, const Groups& g) {
+  w.begin("groups");
+  const std::vector<std::string> names = g.names();
+  w.put(static_cast<std::uint64_t>(names.size()));
+  for (const std::string& name : names) {
+    w.put_string(name);
+    w.put(g.get(name));
+  }
+}
+
+void load_groups(StateReader& r, Elements& el) {
+  r.begin("groups");
+  const auto n = r.get<std::uint64_t>("group count");
+  Groups g;
+  for (std::uint64_t k = 0; k < n; ++k) {
+    std::string name = r.get_string("group name");
+    std::vector<std::uint64_t> tags;
+    r.get(tags, "group tags");
+    for (std::uint64_t tag : tags)
+      if (tag >= el.next_tag)
+        r.fail("group tags", "group '" + name + "' names tag " + std::to_string(tag) +
+                                 ", which no element of this job holds");
+    try {
+      g.add(std::move(name), std::move(tags));
+    } catch (const std::invalid_argument& e) {
+      r.fail("group tags", e.what());
+    }
+  }
+  el.groups = std::move(g);
+}
+
 void save_ledger(StateWriter& w, const EnergyLedger& L) {
   w.begin("energy");
   w.put(L.potential.stored);
@@ -115,6 +206,8 @@ void System::save_state(StateWriter& w) const {
   w.put(initial_kinetic_);
   w.put(initial_stored_);
   save_elements(w, el_);
+  save_topology(w, el_.topology);
+  save_groups(w, el_.groups);
   save_ledger(w, ledger_);
   w.begin("damping");
   // The *_prev_ arrays are empty today; saved so that bookkeeping using them resumes too.
@@ -148,6 +241,8 @@ void System::load_state(StateReader& r) {
   initial_kinetic_ = r.get<double>("initial_kinetic");
   initial_stored_ = r.get<double>("initial_stored");
   load_elements(r, el_);
+  load_topology(r, el_);
+  load_groups(r, el_);
   load_ledger(r, ledger_);
 
   r.begin("damping");

@@ -15,8 +15,8 @@ namespace {
 
 System build_system(const TwistJobSpec& spec, IntegratorSettings settings, Rope& rope) {
   Elements el;
-  auto bonds = std::make_unique<ParallelBond>();
-  rope = build_hex_rope(el, bonds.get(), spec.rope);
+  rope = build_hex_rope(el, spec.rope);
+  auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
   if (spec.temperature_k > 0) {
     // Equipartition: ½ m <v_k²> = ½ kB T per component, likewise for the spins.
     const double kT = units::kBoltzmann * spec.temperature_k;

@@ -38,11 +38,12 @@ System make_bundle_system(const BundleSpec& spec, IntegratorSettings settings) {
     if (!std::isfinite(v) || v < 0)
       throw std::invalid_argument("bundle speed, spin and bundle spin must be finite and >= 0");
   Elements el;
-  auto bonds = std::make_unique<ParallelBond>();
   if (spec.tubes == 7)
-    add_seven_tube_bundle(el, bonds.get(), spec.segments, spec.spacing);
+    add_seven_tube_bundle(el, spec.segments, spec.spacing);
   else
-    add_straight_tube(el, bonds.get(), Vec3::Zero(), Vec3::UnitX(), spec.segments, 0);
+    add_straight_tube(el, Vec3::Zero(), Vec3::UnitX(), spec.segments, 0);
+  // Bonds at rest in the built tubes (randomize_motion below sets velocities only).
+  auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
   randomize_motion(el, spec.speed, spec.spin, spec.seed);
   // Rigid rotation Ω about the rope axis (x through the origin): v += Ω × x, ω += Ω.
   const Vec3 omega(spec.bundle_spin, 0, 0);

@@ -21,7 +21,7 @@ int next_tube_id(const Elements& el) {
 
 }  // namespace
 
-TubeIndices add_random_film(Elements& el, ParallelBond* bonds, const FilmSpec& spec) {
+TubeIndices add_random_film(Elements& el, const FilmSpec& spec) {
   if (!std::isfinite(spec.side) || spec.side <= 0)
     throw std::invalid_argument("film: side must be finite and > 0 nm");
   if (!std::isfinite(spec.thickness) || spec.thickness < 0)
@@ -51,12 +51,12 @@ TubeIndices add_random_film(Elements& el, ParallelBond* bonds, const FilmSpec& s
     const double dz = uniform(-max_z, max_z);
     const double rho = std::sqrt(std::max(0.0, 1.0 - dz * dz));
     const Vec3 dir(rho * std::cos(phi), rho * std::sin(phi), dz);
-    out.push_back(add_straight_tube(el, bonds, centre - half_length * dir, dir, n, id++));
+    out.push_back(add_straight_tube(el, centre - half_length * dir, dir, n, id++));
   }
   return out;
 }
 
-TubeIndices add_seven_tube_bundle(Elements& el, ParallelBond* bonds, int segments, double spacing) {
+TubeIndices add_seven_tube_bundle(Elements& el, int segments, double spacing) {
   if (segments < 1) throw std::invalid_argument("bundle: needs at least 1 segment per tube");
   if (!std::isfinite(spacing) || spacing <= 0)
     throw std::invalid_argument("bundle: spacing must be finite and > 0 nm");
@@ -65,11 +65,11 @@ TubeIndices add_seven_tube_bundle(Elements& el, ParallelBond* bonds, int segment
   int id = next_tube_id(el);
   TubeIndices out;
   out.reserve(7);
-  out.push_back(add_straight_tube(el, bonds, Vec3(x0, 0, 0), Vec3::UnitX(), segments, id++));
+  out.push_back(add_straight_tube(el, Vec3(x0, 0, 0), Vec3::UnitX(), segments, id++));
   for (int k = 1; k < 7; ++k) {
     const double a = (k - 1) * std::numbers::pi / 3.0;
     const Vec3 start(x0, spacing * std::cos(a), spacing * std::sin(a));
-    out.push_back(add_straight_tube(el, bonds, start, Vec3::UnitX(), segments, id++));
+    out.push_back(add_straight_tube(el, start, Vec3::UnitX(), segments, id++));
   }
   return out;
 }

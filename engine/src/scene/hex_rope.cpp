@@ -101,7 +101,7 @@ std::vector<int> line_defect_sites(const HexLattice& L, const LineDefect& d) {
   return out;
 }
 
-Rope build_hex_rope(Elements& el, ParallelBond* bonds, const RopeSpec& spec) {
+Rope build_hex_rope(Elements& el, const RopeSpec& spec) {
   require(spec.segments >= 2, "segments must be >= 2, got " + std::to_string(spec.segments));
   require(spec.grip_segments >= 1 && spec.grip_segments <= spec.segments / 2,
           "grip_segments must be in [1, " + std::to_string(spec.segments / 2) + "], got " +
@@ -131,7 +131,6 @@ Rope build_hex_rope(Elements& el, ParallelBond* bonds, const RopeSpec& spec) {
 
   const Quat q = quat_from_axis(Vec3::UnitZ());
   const double z0 = -0.5 * (S - 1) * cnt::kSegmentLength;
-  const BondStiffness k = cnt_bond_stiffness();
   rope.site_elements.assign(n, std::vector<long>(S, -1));
   int tube_id = 0;
   std::vector<std::uint64_t> grip_a, grip_b;  // tags
@@ -149,9 +148,6 @@ Rope build_hex_rope(Elements& el, ParallelBond* bonds, const RopeSpec& spec) {
       }
       const Vec3 x(p.x(), p.y(), z0 + i * cnt::kSegmentLength);
       const std::size_t e = el.add(cnt_segment(x, q, tube->id, i));
-      if (bonds && !tube->elements.empty())
-        bonds->add(make_bond(el, static_cast<std::uint32_t>(tube->elements.back()),
-                             static_cast<std::uint32_t>(e), k));
       tube->elements.push_back(e);
       rope.site_elements[s][i] = static_cast<long>(e);
       if (i < spec.grip_segments) grip_a.push_back(el.tag[e]);
@@ -160,6 +156,7 @@ Rope build_hex_rope(Elements& el, ParallelBond* bonds, const RopeSpec& spec) {
   }
   require(!rope.tubes.empty(), "the defects leave no tube in the rope");
   require(!grip_a.empty() && !grip_b.empty(), "the defects leave a grip without tubes");
+  for (const RopeTube& t : rope.tubes) record_cnt_tube(el, t.elements, t.id, false);
   el.groups.add(std::string(kRopeGripA), std::move(grip_a));
   el.groups.add(std::string(kRopeGripB), std::move(grip_b));
 

@@ -10,6 +10,7 @@
 
 #include "mdem/core/groups.h"
 #include "mdem/core/math.h"
+#include "mdem/core/topology.h"
 
 namespace mdem {
 
@@ -45,6 +46,9 @@ struct Elements {
   std::vector<std::uint64_t> tag;
   // Named sets of elements (by tag), declared by the scene or job that built them.
   Groups groups;
+  // Bonds (as pairs of tags) and the ordered segments of each CNT tube, open or closed (a ring),
+  // recorded by the scene builders; the bond models are made from it.
+  Topology topology;
   // State.
   std::vector<Vec3> x;  // centre position (nm)
   std::vector<Quat> q;  // orientation, unit quaternion, body -> world; a CNT axis is body x
@@ -94,10 +98,16 @@ struct Elements {
   void fix_all(std::size_t i) { dof[i].fill(DofMode::Fixed); }
 
   // Whether a CNT-CNT pair model leaves (i, j) out: not both CNT segments, or segments of one
-  // tube fewer than `exclusion` indices apart (model.md §4's intra-tube exclusion).
+  // tube fewer than `exclusion` indices apart (model.md §4's intra-tube exclusion). Around a ring
+  // (a closed chain of n segments in `topology`) the distance is min(|Δindex|, n − |Δindex|), so
+  // the exclusion reaches across the seam as it does anywhere else on the ring.
   bool cnt_pair_excluded(std::size_t i, std::size_t j, int exclusion) const {
     if (kind[i] != ElementKind::CntSegment || kind[j] != ElementKind::CntSegment) return true;
-    return tube[i] >= 0 && tube[i] == tube[j] && std::abs(index[i] - index[j]) < exclusion;
+    if (tube[i] < 0 || tube[i] != tube[j]) return false;
+    const int d = std::abs(index[i] - index[j]);
+    if (d < exclusion) return true;
+    const int ring = topology.ring_length(tube[i]);
+    return ring > 0 && ring - d < exclusion;
   }
 };
 

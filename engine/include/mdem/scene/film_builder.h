@@ -6,7 +6,6 @@
 #include <vector>
 
 #include "mdem/core/elements.h"
-#include "mdem/force/bond/parallel_bond.h"
 
 namespace mdem {
 
@@ -29,22 +28,22 @@ using TubeIndices = std::vector<std::vector<std::size_t>>;
 // midpoint of its axis) uniform in the square, its z uniform in [−thickness/2, thickness/2], its
 // direction uniform over the band of directions at most max_out_of_plane_deg out of the xy plane
 // (azimuth uniform in [0, 2π), axis z-component uniform in [−sin a, sin a]). Tubes are added with
-// add_straight_tube (tube ids continue after the largest id already in `el`) and, when `bonds` is
-// not null, their intra-tube bonds. Deterministic: std::mt19937_64 seeded with spec.seed and a
-// fixed mapping of its output to [0, 1), so the same seed gives the same film on every standard
-// library. Tubes may cross or overlap (a pre-relaxation under the finite-overlap vdW law removes
-// that). Throws std::invalid_argument for a non-positive side, tube or segment count, a negative
-// thickness or an angle outside [0°, 90°].
-TubeIndices add_random_film(Elements& el, ParallelBond* bonds, const FilmSpec& spec);
+// add_straight_tube (tube ids continue after the largest id already in `el`), which records each
+// tube and its intra-tube bonds in el.topology. Deterministic: std::mt19937_64 seeded with
+// spec.seed and a fixed mapping of its output to [0, 1), so the same seed gives the same film on
+// every standard library. Tubes may cross or overlap (a pre-relaxation under the finite-overlap vdW
+// law removes that). Throws std::invalid_argument for a non-positive side, tube or segment count, a
+// negative thickness or an angle outside [0°, 90°].
+TubeIndices add_random_film(Elements& el, const FilmSpec& spec);
 
 // A seven-tube rope along x: a centre tube on the x axis and six around it on a triangular
 // lattice, centre-to-centre `spacing` nm apart, at angles 0°, 60°, …, 300° about x starting from
 // +y (tube k ≥ 1 at y = spacing·cos((k−1)·60°), z = spacing·sin((k−1)·60°)). Each tube has
 // `segments` segments, the first centred at x = −(segments − 1)·T/2 so the rope is centred on the
 // origin; the centre tube is added first. Tube ids continue after the largest id already in
-// `el`; bonds are added when `bonds` is not null. (A single tube is add_straight_tube.) Throws
+// `el`; tubes and bonds are recorded in el.topology. (A single tube is add_straight_tube.) Throws
 // std::invalid_argument unless segments ≥ 1 and spacing > 0.
-TubeIndices add_seven_tube_bundle(Elements& el, ParallelBond* bonds, int segments, double spacing);
+TubeIndices add_seven_tube_bundle(Elements& el, int segments, double spacing);
 
 // The generator's mapping of a 64-bit random word to [0, 1): the top 53 bits times 2^-53.
 inline double unit_interval(std::uint64_t word) {

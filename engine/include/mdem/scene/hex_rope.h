@@ -9,7 +9,6 @@
 #include <vector>
 
 #include "mdem/core/elements.h"
-#include "mdem/force/bond/parallel_bond.h"
 #include "mdem/force/contact/anisotropic_vdw.h"
 
 namespace mdem {
@@ -84,11 +83,11 @@ struct Rope {
 inline constexpr std::string_view kRopeGripA = "rope.grip_a";
 inline constexpr std::string_view kRopeGripB = "rope.grip_b";
 
-// Appends the rope's elements (and its bonds, when bonds is not null) to el, and declares the
-// groups kRopeGripA and kRopeGripB. Throws
-// std::invalid_argument naming the field for layers outside [1, 50], segments < 2, a missing or
-// defect site that does not exist, grip_segments outside [1, segments/2], or a spec that leaves
-// no tube.
-Rope build_hex_rope(Elements& el, ParallelBond* bonds, const RopeSpec& spec);
+// Appends the rope's elements to el, records its tubes and intra-tube bonds in el.topology (one
+// open chain per RopeTube, tube ids from 0), and declares the groups kRopeGripA and kRopeGripB.
+// Throws std::invalid_argument naming the field for layers outside [1, 50], segments < 2, a
+// missing or defect site that does not exist, grip_segments outside [1, segments/2], or a spec
+// that leaves no tube.
+Rope build_hex_rope(Elements& el, const RopeSpec& spec);
 
 }  // namespace mdem

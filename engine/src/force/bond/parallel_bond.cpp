@@ -158,6 +158,16 @@ BondResult bond_eval(const Bond& b, const Vec3& xi, const Quat& qi, const Vec3& 
   return r;
 }
 
+std::unique_ptr<ParallelBond> ParallelBond::from_topology(const Elements& el, BondType type,
+                                                          const BondStiffness& k) {
+  auto model = std::make_unique<ParallelBond>();
+  for (const TopologyBond& tb : el.topology.bonds())
+    if (tb.type == type)
+      model->add(make_bond(el, static_cast<std::uint32_t>(el.index_of(tb.a)),
+                           static_cast<std::uint32_t>(el.index_of(tb.b)), k));
+  return model;
+}
+
 void ParallelBond::compute(const Elements& el, const NeighborList*, ForceSink& sink) const {
   if (bonds_.empty()) return;
   const int nt = sink.threads();

@@ -10,6 +10,7 @@
 //   U = ½ kn A (g·n)² + ½ ks A |g − (g·n)n|² + ½ kn I |θ − (θ·n)n|² + ½ ks J (θ·n)²
 // so small deformations give F_n = −kn A u_n, F_s = −ks A u_s, M_b = −kn I θ_b, M_t = −ks J θ_t.
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "mdem/force/force_model.h"
@@ -85,6 +86,12 @@ void add_bond_stiffness(const Bond& b, StiffnessSums& s);
 
 class ParallelBond final : public ForceModel {
  public:
+  // The bonds of `type` recorded in el.topology, in their recorded order, each made by make_bond
+  // from its first to its second element in the elements' current configuration (their rest
+  // state). Throws std::invalid_argument as make_bond does, and std::out_of_range for a tag no
+  // element holds.
+  static std::unique_ptr<ParallelBond> from_topology(const Elements& el, BondType type,
+                                                     const BondStiffness& k);
   std::string_view name() const override { return "parallel_bond"; }
   void add(const Bond& b) { bonds_.push_back(b); }
   const std::vector<Bond>& bonds() const { return bonds_; }
