@@ -18,7 +18,21 @@ struct FilmSpec {
   int tubes = 0;              // number of tubes grown
   int segments_per_tube = 0;  // segments of each tube (length = n·T)
   double max_out_of_plane_deg = 2;
-  unsigned seed = 0;
+  std::uint64_t seed = 0;
+  // tensile.md §3.1 (both off: the film described below, unchanged).
+  // contain: every segment centre inside the slab, |z| ≤ thickness/2. With contain or
+  // periodic_split the draws of a tube follow §3.1's order: centre x, y, the azimuth φ, then the
+  // axis's z component s uniform in [−sin a, sin a], redrawn while h = ½(n−1)T|s| > thickness/2,
+  // then centre z uniform in [−(thickness/2 − h), thickness/2 − h] (uncontained: s drawn once, z in
+  // the whole slab).
+  bool contain = false;
+  // periodic_split: the segment centres, c_j = centre + (j − (n−1)/2)·T·b, are wrapped in x and
+  // y into [−side/2, side/2), and a tube is cut wherever a coordinate wrapped between consecutive
+  // segments, so no bond crosses the box. Each piece is a tube of its own (new id, indices from
+  // 0, its own open chain and bonds) whose Chain::parent is the generated tube's id. Generated
+  // tube k gets id base + k (base = one past the largest tube id already in `el`), an id no
+  // chain takes; its pieces get ids base + tubes, base + tubes + 1, ... in order of generation.
+  bool periodic_split = false;
 };
 
 // Element indices of each tube added, in tube order (segment order within a tube).
@@ -33,7 +47,9 @@ using TubeIndices = std::vector<std::vector<std::size_t>>;
 // spec.seed and a fixed mapping of its output to [0, 1), so the same seed gives the same film on
 // every standard library. Tubes may cross or overlap (a pre-relaxation under the finite-overlap vdW
 // law removes that). Throws std::invalid_argument for a non-positive side, tube or segment count, a
-// negative thickness or an angle outside [0°, 90°].
+// negative thickness or an angle outside [0°, 90°], and, with contain, when a tube fits the slab
+// with a chance below 1e-3 per draw (a tube too long for the thickness at any allowed tilt).
+// Returns one entry per tube added: per piece with periodic_split.
 TubeIndices add_random_film(Elements& el, const FilmSpec& spec);
 
 // A seven-tube rope along x: a centre tube on the x axis and six around it on a triangular
