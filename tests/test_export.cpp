@@ -434,3 +434,29 @@ TEST_F(ExportTest, TheMdemBinaryDispatchesTheCommands) {
   std::tie(status, output) = shell(quote(mdem) + " export " + kJob + " --format nope");
   EXPECT_EQ(WEXITSTATUS(status), 2) << output;
 }
+
+TEST_F(ExportTest, DefaultPlotShowsEnergyChangesInPanelsWithWords) {
+  const std::string svg = file("energy.svg");
+  const Result r = plot({kJob, "--out", svg});
+  ASSERT_EQ(r.code, mdem::cli::kOk) << r.err;
+  std::ifstream is(svg);
+  const std::string text((std::istreambuf_iterator<char>(is)), std::istreambuf_iterator<char>());
+  for (const char* words :
+       {"energy changes from the start", "change from start (eV)", "kinetic (eV)", "total (eV)",
+        "potential (eV)", "kinetic energy", "work, dissipation and balance"})
+    EXPECT_NE(text.find(words), std::string::npos) << words;
+  EXPECT_EQ(text.find("kinetic_eV"), std::string::npos) << "a column name in the legend";
+}
+
+TEST_F(ExportTest, PlotToAPathThatCannotBeWrittenNamesItNotGnuplot) {
+  fs::create_directory(file("taken.png"));  // a directory where the picture should go
+  Result r = plot({kJob, "--out", file("taken.png")});
+  EXPECT_EQ(r.code, mdem::cli::kJobFailed);
+  EXPECT_NE(r.err.find("cannot write the picture '" + file("taken.png") + "'"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("gnuplot"), std::string::npos) << r.err;
+  r = plot({kJob, "--out", "/proc/mdem-test.png"});
+  EXPECT_EQ(r.code, mdem::cli::kJobFailed);
+  EXPECT_NE(r.err.find("/proc/mdem-test.png"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("gnuplot"), std::string::npos) << r.err;
+}

@@ -8,8 +8,10 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -111,6 +113,12 @@ class ExportJobsTest : public ::testing::Test {
     return j;
   }
 
+  // `mdem export ID --format vtk --out pvd`, read back.
+  static json export_vtk(const std::string& id, const std::string& pvd) {
+    export_to(id, "vtk", pvd);
+    return read_back("python3", "reader.py", {"pvd", pvd});
+  }
+
   static std::vector<Snapshot> snapshots(const std::string& id) {
     return ResultsStore(db_).snapshots(id);
   }
@@ -179,21 +187,23 @@ TEST_F(ExportJobsTest, AseReadsTheExtendedXyzOfEveryJobKind) {
 
 TEST_F(ExportJobsTest, BinaryVtkHoldsTheGrainsAndThePlatensAsDiscs) {
   ASSERT_FALSE(compression_.empty());
-  const std::string pvd = file("vtk/crush.pvd");
-  export_to(compression_, "vtk", pvd);
-  const json read = read_back("python3", "reader.py", {"pvd", pvd});
+  const json read = export_vtk(compression_, file("vtk/crush.pvd"));
   const std::vector<Snapshot> snaps = snapshots(compression_);
-  ASSERT_EQ(read["datasets"].size(), 2 * snaps.size());  // the elements and the platens
+  // Per snapshot the elements (part 0), the bonds (2) and the platens (1).
+  ASSERT_EQ(read["datasets"].size(), 3 * snaps.size());
   for (std::size_t k = 0; k < snaps.size(); ++k) {
     const Snapshot& s = snaps[k];
     char padded[16];
     std::snprintf(padded, sizeof padded, "%04zu", k);
-    const json& grains = read["pieces"][2 * k];
-    const json& platens = read["pieces"][2 * k + 1];
-    EXPECT_EQ(read["datasets"][2 * k]["file"], std::string("crush_") + padded + ".vtp");
-    EXPECT_EQ(read["datasets"][2 * k + 1]["file"], std::string("crush_walls_") + padded + ".vtp");
-    EXPECT_EQ(read["datasets"][2 * k]["part"], 0);
-    EXPECT_EQ(read["datasets"][2 * k + 1]["part"], 1);
+    const json& sets = read["datasets"];
+    EXPECT_EQ(sets[3 * k]["file"], std::string("crush_") + padded + ".vtp");
+    EXPECT_EQ(sets[3 * k + 1]["file"], std::string("crush_bonds_") + padded + ".vtp");
+    EXPECT_EQ(sets[3 * k + 2]["file"], std::string("crush_walls_") + padded + ".vtp");
+    EXPECT_EQ(sets[3 * k]["part"], 0);
+    EXPECT_EQ(sets[3 * k + 1]["part"], 2);
+    EXPECT_EQ(sets[3 * k + 2]["part"], 1);
+    const json& grains = read["pieces"][3 * k];
+    const json& platens = read["pieces"][3 * k + 2];
     const std::vector<std::size_t> ids = particles(s);
     ASSERT_EQ(ids.size() + 2, s.size()) << "two platens";
     ASSERT_EQ(grains["n_points"], ids.size());
@@ -203,6 +213,8 @@ TEST_F(ExportJobsTest, BinaryVtkHoldsTheGrainsAndThePlatensAsDiscs) {
       expect_close(grains["point_data"]["radius"][p], s.radius[ids[p]], at + " radius");
       EXPECT_EQ(grains["point_data"]["kind"][p], kGrain) << at;
       expect_close(grains["point_data"]["slip_nm"][p], s.scalars.back().second[ids[p]], at);
+      ASSERT_EQ(s.v.size(), s.size());
+      expect_vec(grains["point_data"]["velocity"][p], s.v[ids[p]], at + " velocity");
     }
     // Each platen a 64-gon of its radius, in its plane, around its point, with its normal.
     ASSERT_EQ(platens["n_polys"], 2);
@@ -231,9 +243,7 @@ TEST_F(ExportJobsTest, BinaryVtkHoldsTheGrainsAndThePlatensAsDiscs) {
 
 TEST_F(ExportJobsTest, BinaryVtkOfATwistHoldsItsTubesAsPolylines) {
   ASSERT_FALSE(twist_.empty());
-  const std::string pvd = file("rope.pvd");
-  export_to(twist_, "vtk", pvd);
-  const json read = read_back("python3", "reader.py", {"pvd", pvd});
+  const json read = export_vtk(twist_, file("rope.pvd"));
   const std::vector<Snapshot> snaps = snapshots(twist_);
   ASSERT_EQ(read["datasets"].size(), snaps.size());  // no platens, no walls files
   for (std::size_t k = 0; k < snaps.size(); ++k) {
@@ -274,4 +284,61 @@ TEST_F(ExportJobsTest, EveryCsvHeaderHasUniqueNamesAndTimeOnce) {
   const auto columns = ResultsStore(db_).columns(compression_);
   const json read = read_back("python3", "reader.py", {"csv", file(compression_ + ".csv")});
   EXPECT_EQ(read["header"].size(), 2 + columns.size() - 1);
+}
+
+// The bond network of a brittle (CdS) particle crushed far enough to break bonds: one line per
+// bond between the grains it joins, its state the job's own counts of intact, yielded and broken
+// bonds in the final frame.
+TEST_F(ExportJobsTest, BinaryVtkHoldsTheBondNetworkWithItsStates) {
+  const std::string id =
+      run("compression",
+          {"--outer-radius", "4", "--grain-radius", "1,1.5", "--peak", "2.5", "--speed", "0.1",
+           "--material", "cds", "--threads", "1", "--snapshot-every", "10", "--no-unload"});
+  ASSERT_FALSE(id.empty());
+  const json read = export_vtk(id, file("cds/crush.pvd"));
+  const std::vector<Snapshot> snaps = snapshots(id);
+  ASSERT_EQ(read["datasets"].size(), 3 * snaps.size());
+  const Snapshot& last = snaps.back();
+  const json& grains = read["pieces"][3 * (snaps.size() - 1)];
+  const json& bonds = read["pieces"][3 * (snaps.size() - 1) + 1];
+  ASSERT_EQ(bonds["n_lines"], last.bonds.size());
+  ASSERT_GT(last.bonds.size(), 10u);
+  EXPECT_EQ(bonds["points"], grains["points"]);  // the element file's points, in its order
+  std::map<int, long> count;
+  for (std::size_t b = 0; b < last.bonds.size(); ++b) {
+    const json& line = bonds["lines"][b];
+    ASSERT_EQ(line.size(), 2u);
+    // Grains come first in a compression snapshot, so point p is element p.
+    expect_vec(bonds["points"][line[0].get<std::size_t>()], last.x[last.bonds[b].i], "bond end i");
+    expect_vec(bonds["points"][line[1].get<std::size_t>()], last.x[last.bonds[b].j], "bond end j");
+    ++count[bonds["cell_data"]["state"][b].get<int>()];
+  }
+  const auto columns = ResultsStore(db_).columns(id);
+  const auto frames = ResultsStore(db_).frames(id);
+  ASSERT_EQ(frames.back().step, last.step);
+  auto column = [&](const std::string& name) {
+    const auto it = std::find(columns.begin(), columns.end(), name);
+    EXPECT_NE(it, columns.end()) << name;
+    return frames.back().values[static_cast<std::size_t>(it - columns.begin())];
+  };
+  EXPECT_EQ(count[2], column("bonds_broken"));
+  EXPECT_GT(count[2], 0) << "the test should break bonds";
+  EXPECT_EQ(count[0] + count[1], column("bonds_intact"));
+  EXPECT_EQ(count[1], column("bonds_yielded"));
+}
+
+// The force-displacement curve: the x label says displacement, the legend force, with units.
+TEST_F(ExportJobsTest, ForceDisplacementPlotSaysDisplacement) {
+  const std::string svg = file("fd.svg");
+  std::ostringstream o, e;
+  ASSERT_EQ(mdem::cli::plot({compression_, "--columns", "force_nN", "--x", "displacement_nm",
+                             "--out", svg, "--db", db_},
+                            o, e),
+            mdem::cli::kOk)
+      << e.str();
+  std::ifstream is(svg);
+  const std::string text((std::istreambuf_iterator<char>(is)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("displacement (nm)"), std::string::npos);
+  EXPECT_NE(text.find("force (nN)"), std::string::npos);
+  EXPECT_EQ(text.find("length (nm)"), std::string::npos);
 }

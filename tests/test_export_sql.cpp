@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "../client/src/results_store.h"
+#include "support.h"
 
 namespace {
 
@@ -28,20 +29,8 @@ using mdem::cli::ResultsStore;
 const std::vector<std::string> kColumns = {"kinetic_eV", "bond_stretch_eV", "strain",
                                            "applied_torque_nNnm", "time_ps"};
 
-class TempDir {
- public:
-  TempDir() {
-    std::string tmpl = (fs::temp_directory_path() / "mdem-sql-test-XXXXXX").string();
-    path_ = mkdtemp(tmpl.data());
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  fs::path path_;
+struct TempDir : mdem::testing::TempDir {
+  TempDir() : mdem::testing::TempDir("mdem-sql-test") {}
 };
 
 bool same_bits(double a, double b) {
@@ -140,9 +129,9 @@ void expect_long_form_matches(Sql& sql, const std::string& id,
                                                    {"applied_torque_nNnm", "nN·nm"},
                                                    {"time_ps", "ps"}};
   for (std::size_t c = 0; c < kColumns.size(); ++c) {
-    const auto rows = sql.rows(
-        "SELECT step, time_ps, value, unit FROM frames_long WHERE job_id = '" + id +
-        "' AND name = '" + kColumns[c] + "' ORDER BY step");
+    const auto rows =
+        sql.rows("SELECT step, time_ps, value, unit FROM frames_long WHERE job_id = '" + id +
+                 "' AND name = '" + kColumns[c] + "' ORDER BY step");
     ASSERT_EQ(rows.size(), written.size()) << kColumns[c];
     for (std::size_t k = 0; k < rows.size(); ++k) {
       const long step = std::stol(rows[k].text[0]);
@@ -175,8 +164,7 @@ TEST(ResultsSql, EnergiesOfAStoredRunAreQueryableByName) {
       "SELECT SUM(value) FROM frames_long WHERE job_id = 'j-a' AND step = 500 AND unit = 'eV'");
   ASSERT_EQ(sum.size(), 1u);
   EXPECT_DOUBLE_EQ(sum[0].real[0], written[5].values[0] + written[5].values[1]);
-  EXPECT_EQ(sql.rows("SELECT 1 FROM frames_long WHERE job_id = 'j-b'").size(),
-            3 * kColumns.size());
+  EXPECT_EQ(sql.rows("SELECT 1 FROM frames_long WHERE job_id = 'j-b'").size(), 3 * kColumns.size());
 }
 
 TEST(ResultsSql, AFileWithoutTheLongFormGainsItWhenOpened) {
@@ -210,4 +198,58 @@ TEST(ResultsSql, AFileWithoutTheLongFormGainsItWhenOpened) {
   // Opening again adds nothing twice.
   { ResultsStore again(path); }
   EXPECT_EQ(sql.rows("SELECT 1 FROM frame_values").size(), written.size() * kColumns.size());
+}
+
+// Snapshots keep their velocities and bonds; a file whose snapshots table predates them (no v,
+// bonds columns) opens, gains the columns and reads its old snapshots without them.
+TEST(ResultsSql, SnapshotsKeepVelocitiesAndBondsAndOldSnapshotsStillRead) {
+  TempDir tmp;
+  const std::string path = tmp.file("snap.db");
+  mdem::Snapshot s;
+  s.step = 7;
+  s.time_ps = 0.25;
+  for (int i = 0; i < 3; ++i) {
+    s.x.emplace_back(i, 2.0 * i, -1.0 * i);
+    s.q.push_back(mdem::Quat::Identity());
+    s.v.emplace_back(0.1 * i, -0.0, 3e-17 * i);
+    s.radius.push_back(1.0 + i);
+    s.kind.push_back(2);
+    s.tube.push_back(-1);
+    s.index.push_back(-1);
+  }
+  s.bonds = {{0, 1, mdem::BondState::Intact},
+             {1, 2, mdem::BondState::Yielded},
+             {0, 2, mdem::BondState::Broken}};
+  {
+    ResultsStore store(path);
+    fill(store, "j-s", 2);
+    store.append_snapshot("j-s", s);
+    const auto back = store.snapshot("j-s", 0);
+    ASSERT_TRUE(back.has_value());
+    ASSERT_EQ(back->v.size(), 3u);
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k) EXPECT_TRUE(same_bits(back->v[i][k], s.v[i][k]));
+    ASSERT_EQ(back->bonds.size(), 3u);
+    for (int b = 0; b < 3; ++b) {
+      EXPECT_EQ(back->bonds[b].i, s.bonds[b].i);
+      EXPECT_EQ(back->bonds[b].j, s.bonds[b].j);
+      EXPECT_EQ(back->bonds[b].state, s.bonds[b].state);
+    }
+    // A bond naming no element is refused, and nothing is written.
+    mdem::Snapshot bad = s;
+    bad.bonds.push_back({0, 3, mdem::BondState::Intact});
+    EXPECT_THROW(store.append_snapshot("j-s", bad), mdem::cli::StoreError);
+    EXPECT_EQ(store.snapshot_count("j-s"), 1u);
+  }
+  {
+    Sql sql(path);
+    sql.exec("ALTER TABLE snapshots DROP COLUMN v; ALTER TABLE snapshots DROP COLUMN bonds;");
+  }
+  {
+    ResultsStore store(path);  // upgraded: the old snapshot reads without velocities or bonds
+    EXPECT_TRUE(store.snapshot("j-s", 0)->v.empty());
+    store.append_snapshot("j-s", s);
+    EXPECT_EQ(store.snapshot("j-s", 1)->bonds.size(), 3u);
+    EXPECT_EQ(store.snapshot("j-s", 1)->v.size(), 3u);
+  }
 }

@@ -217,7 +217,8 @@ class VtkPiece {
     os << "    <Piece " << attributes << ">\n";
     for (const std::string& section : order_) {
       os << "      <" << section;
-      if (section == "PointData") os << " Scalars=\"radius\" Vectors=\"velocity\"";
+      if (section == "PointData")
+        os << " Scalars=\"radius\" Vectors=\"" << (has("velocity") ? "velocity" : "axis") << "\"";
       os << ">\n";
       for (const VtkArray& a : sections_.at(section)) {
         os << "        <DataArray type=\"" << a.type << "\"";
@@ -231,6 +232,12 @@ class VtkPiece {
   }
 
  private:
+  bool has(const std::string& name) const {
+    for (const auto& [section, arrays] : sections_)
+      for (const VtkArray& a : arrays)
+        if (a.name == name) return true;
+    return false;
+  }
   AppendedData& data_;
   std::map<std::string, std::vector<VtkArray>> sections_;
   std::vector<std::string> order_;
@@ -354,6 +361,10 @@ void write_vtp(std::ostream& os, const Snapshot& s) {
               const Vec3 a = body_x_axis(s.q[i]);
               v.insert(v.end(), {a.x(), a.y(), a.z()});
             }));
+  if (!s.v.empty())
+    piece.add("PointData", "Float64", "velocity", 3, flat(ids, [&](auto& v, std::size_t i) {
+                v.insert(v.end(), {s.v[i].x(), s.v[i].y(), s.v[i].z()});
+              }));
   piece.add("PointData", "Float64", "radius", 1, pick(ids, s.radius));
   piece.add("PointData", "Int32", "kind", 1, pick(ids, s.kind));
   piece.add("PointData", "Int32", "tube", 1, pick(ids, s.tube));
@@ -370,10 +381,12 @@ void write_vtp(std::ostream& os, const Snapshot& s) {
   add_cells(piece, "Lines", lines);
   write_vtk_document(
       os, s,
-      "\n     Points: element centres (platens are in the _walls files). orientation: the unit "
-      "quaternion\n     body -> world in x y z w order (w the scalar part, as OVITO's "
-      "Orientation). axis: body x in the\n     world frame (a CNT segment's axis). Verts: one "
-      "per element. Lines: one polyline per tube\n     through its segments in index order.",
+      "\n     Points: element centres (platens are in the _walls files, bonds in the _bonds "
+      "files).\n     orientation: the unit quaternion body -> world in x y z w order (w the scalar "
+      "part, as\n     OVITO's Orientation). axis: body x in the world frame (a CNT segment's "
+      "axis). "
+      "velocity:\n     nm/ps. Verts: one per element. Lines: one polyline per tube through its "
+      "segments in index order.",
       "NumberOfPoints=\"" + std::to_string(n) + "\" NumberOfVerts=\"" + std::to_string(n) +
           "\" NumberOfLines=\"" + std::to_string(lines.size()) +
           "\" NumberOfStrips=\"0\" NumberOfPolys=\"0\"",
@@ -418,6 +431,33 @@ void write_walls_vtp(std::ostream& os, const Snapshot& s) {
       "NumberOfPoints=\"" + std::to_string(points.size() / 3) +
           "\" NumberOfVerts=\"0\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"" +
           std::to_string(polys.size()) + "\"",
+      piece, data);
+}
+
+void write_bonds_vtp(std::ostream& os, const Snapshot& s) {
+  const std::vector<std::size_t> ids = particle_ids(s);
+  std::vector<std::int64_t> point_of(s.size(), -1);
+  for (std::size_t p = 0; p < ids.size(); ++p) point_of[ids[p]] = static_cast<std::int64_t>(p);
+  AppendedData data;
+  VtkPiece piece(data);
+  std::vector<std::vector<std::int64_t>> lines;
+  std::vector<std::int32_t> state;
+  for (const SnapshotBond& b : s.bonds) {
+    lines.push_back({point_of[b.i], point_of[b.j]});
+    state.push_back(static_cast<std::int32_t>(b.state));
+  }
+  piece.add("Points", "Float64", "position", 3, flat(ids, [&](auto& v, std::size_t i) {
+              v.insert(v.end(), {s.x[i].x(), s.x[i].y(), s.x[i].z()});
+            }));
+  add_cells(piece, "Lines", lines);
+  piece.add("CellData", "Int32", "state", 1, state);
+  write_vtk_document(
+      os, s,
+      "\n     Bonds: one line per bond between the centres of the elements it joins (the "
+      "points of the\n     element file, in its order). state: 0 intact, 1 yielded (has flowed "
+      "plastically), 2 broken.",
+      "NumberOfPoints=\"" + std::to_string(ids.size()) + "\" NumberOfVerts=\"0\" NumberOfLines=\"" +
+          std::to_string(lines.size()) + "\" NumberOfStrips=\"0\" NumberOfPolys=\"0\"",
       piece, data);
 }
 
@@ -504,6 +544,8 @@ std::vector<std::string> export_vtk(const ResultsStore& store, const JobRecord& 
     const Snapshot s = load_snapshot(store, job, k);
     const std::string base = pvd.stem().string() + "_";
     write(base + numbered(k, count) + ".vtp", s, 0, "elements", write_vtp);
+    if (!s.bonds.empty())
+      write(base + "bonds_" + numbered(k, count) + ".vtp", s, 2, "bonds", write_bonds_vtp);
     if (has_walls(s))
       write(base + "walls_" + numbered(k, count) + ".vtp", s, 1, "platens", write_walls_vtp);
   }

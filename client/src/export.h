@@ -36,7 +36,10 @@ void write_vtp(std::ostream& os, const Snapshot& s);
 // (the platen's radius, in its plane), with their normals as cell data.
 bool has_walls(const Snapshot& s);
 void write_walls_vtp(std::ostream& os, const Snapshot& s);
-// A data set of a ParaView collection: part 0 the elements, part 1 the platens.
+// The snapshot's bond network (compression's grain bonds) as a .vtp: the element file's points,
+// one line per bond, its state (0 intact, 1 yielded, 2 broken) as cell data.
+void write_bonds_vtp(std::ostream& os, const Snapshot& s);
+// A data set of a ParaView collection: part 0 the elements, 1 the platens, 2 the bonds.
 struct PvdDataSet {
   double time_ps = 0;
   int part = 0;
@@ -52,8 +55,9 @@ void write_csv(std::ostream& os, const std::vector<std::string>& columns,
 
 // Whole-job exports, reading the store one snapshot at a time. Each returns the files written.
 // xyz: one file with every snapshot as a frame. vtk: `pvd_path` (must end in .pvd) and, next to
-// it, <base>_<k>.vtp and (when there are platens) <base>_walls_<k>.vtp, k zero-padded to at
-// least 4 digits. csv: one file. Throw ExportError (or StoreError).
+// it, <base>_<k>.vtp, <base>_bonds_<k>.vtp when the snapshot has bonds and <base>_walls_<k>.vtp
+// when it has platens, k zero-padded to at least 4 digits. csv: one file. Throw ExportError (or
+// StoreError).
 std::vector<std::string> export_xyz(const ResultsStore& store, const JobRecord& job,
                                     const std::string& path);
 std::vector<std::string> export_vtk(const ResultsStore& store, const JobRecord& job,

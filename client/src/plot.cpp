@@ -52,13 +52,43 @@ bool ends_with(const std::string& s, const std::string& suffix) {
          s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-std::string label_of(const std::string& column) {
-  if (column == "step") return "step";
+const Unit* unit_of(const std::string& column) {
   const Unit* best = nullptr;
   for (const Unit& u : kUnits)
     if (ends_with(column, u.suffix) && (!best || std::strlen(u.suffix) > std::strlen(best->suffix)))
       best = &u;
-  return best ? std::string(best->quantity) + " (" + best->unit + ")" : column;
+  return best;
+}
+
+std::string label_of(const std::string& column) {
+  if (column == "step") return "step";
+  const Unit* u = unit_of(column);
+  return u ? std::string(u->quantity) + " (" + u->unit + ")" : column;
+}
+
+// A column in words: "bond_tension_eV" -> "bond tension", "vdw_eV" -> "van der Waals",
+// "displacement_nm" -> "displacement".
+std::string words_of(const std::string& column) {
+  std::string name = column;
+  if (const Unit* u = unit_of(column)) name.resize(name.size() - std::strlen(u->suffix));
+  static const std::pair<const char*, const char*> kNames[] = {
+      {"vdw", "van der Waals"},
+      {"np_cnt", "NP-CNT contact"},
+      {"np_np", "NP-NP contact"},
+      {"kinetic_translational", "kinetic, translational"},
+      {"kinetic_rotational", "kinetic, rotational"},
+      {"balance_residual", "balance residual"},
+      {"time", "time"}};
+  for (const auto& [from, to] : kNames)
+    if (name == from) return to;
+  std::replace(name.begin(), name.end(), '_', ' ');
+  return name;
+}
+
+// A column in words with its unit: "force_nN" -> "force (nN)".
+std::string legend_of(const std::string& column) {
+  const Unit* u = unit_of(column);
+  return words_of(column) + (u ? std::string(" (") + u->unit + ")" : "");
 }
 
 std::string join(const std::vector<std::string>& v, const char* sep) {
@@ -120,13 +150,15 @@ void write_data(const std::string& path, const PlotRequest& r,
   std::vector<std::size_t> picked;
   for (const std::string& c : r.selected) picked.push_back(column_index(r.columns, c));
   std::ofstream os(path);
-  os << "# " << r.x << ' ' << join(r.selected, " ") << '\n';
+  os << "# " << r.x << ' ' << join(r.selected, " ")
+     << (r.energy_overview ? " (changes from the first frame)" : "") << '\n';
   char buf[32];
   for (const SeriesFrame& f : frames) {
     std::snprintf(buf, sizeof buf, "%.17g", x_value(r, f));
     os << buf;
     for (std::size_t k : picked) {
-      std::snprintf(buf, sizeof buf, "%.17g", f.values[k]);
+      const double start = r.energy_overview ? frames.front().values[k] : 0.0;
+      std::snprintf(buf, sizeof buf, "%.17g", f.values[k] - start);
       os << ' ' << buf;
     }
     os << '\n';
@@ -152,22 +184,116 @@ std::string terminal_line(const std::string& terminal) {
   return "set terminal pngcairo size 1000,640 font 'sans,11'";
 }
 
-std::string script_text(const PlotRequest& r, const std::string& data, std::size_t rows) {
-  std::ostringstream s;
-  s << "set encoding utf8\n"
-    << terminal_line(plot_terminal(r.out_path)) << "\n"
-    << "set termoption noenhanced\n"
-    << "set output " << quoted(fs::absolute(r.out_path).string()) << "\n"
-    << "set title " << quoted(r.title) << "\n"
-    << "set xlabel " << quoted(axis_label({r.x})) << "\n"
-    << "set ylabel " << quoted(axis_label(r.selected)) << "\n"
-    << line_types() << "set grid\nset key outside right top\n";
-  const char* style = rows > 60 ? "with lines" : "with linespoints ps 0.6";
+// The groups of the energy overview, each a panel: a column goes to the first group one of whose
+// name parts it starts with (after any "kinetic"/"external" words), else to "other energy".
+struct EnergyGroup {
+  const char* title;
+  std::vector<const char*> prefixes;
+};
+const std::vector<EnergyGroup>& energy_groups() {
+  static const std::vector<EnergyGroup> groups = {
+      {"bond energy", {"bond_"}},
+      {"van der Waals and contact energy", {"vdw", "np_", "contact"}},
+      {"kinetic energy", {"kinetic"}},
+      {"work, dissipation and balance", {"external_work", "dissipated", "total", "balance"}},
+      {"other energy", {""}}};
+  return groups;
+}
+
+std::size_t group_of(const std::string& column) {
+  const auto& groups = energy_groups();
+  for (std::size_t g = 0; g < groups.size(); ++g)
+    for (const char* p : groups[g].prefixes)
+      if (column.rfind(p, 0) == 0) return g;
+  return groups.size() - 1;
+}
+
+// One plot command: the columns `ks` (indices into r.selected) of the data file.
+void plot_line(std::ostringstream& s, const PlotRequest& r, const std::string& data,
+               const std::vector<std::size_t>& ks, const char* style,
+               const std::string& second_unit) {
   s << "plot ";
-  for (std::size_t k = 0; k < r.selected.size(); ++k)
-    s << (k ? ", \\\n     " : "") << quoted(data) << " using 1:" << k + 2 << ' ' << style
-      << " title " << quoted(r.selected[k]);
-  s << "\nset output\n";
+  int n = 0;
+  for (std::size_t k : ks) {
+    const Unit* u = unit_of(r.selected[k]);
+    const bool y2 = !second_unit.empty() && u && second_unit == u->unit;
+    // Within a panel the lines differ in colour and dash pattern.
+    s << (n ? ", \\\n     " : "") << quoted(data) << " using 1:" << k + 2 << ' ' << style << " lt "
+      << n + 1 << " dt " << n % 5 + 1 << (y2 ? " axes x1y2" : "") << " title "
+      << quoted(legend_of(r.selected[k]) + (y2 ? ", right axis" : ""));
+    ++n;
+  }
+  s << "\n";
+}
+
+std::string script_text(const PlotRequest& r, const std::string& data,
+                        const std::vector<SeriesFrame>& frames) {
+  std::ostringstream s;
+  const bool png = plot_terminal(r.out_path) == "pngcairo";
+  s << "set encoding utf8\n";
+  if (r.energy_overview)
+    s << (png ? "set terminal pngcairo size 1400,900 font 'sans,11'"
+              : "set terminal svg size 1400,900 dynamic font 'sans,11' background rgb 'white'")
+      << "\n";
+  else
+    s << terminal_line(plot_terminal(r.out_path)) << "\n";
+  s << "set termoption noenhanced\n"
+    << "set output " << quoted(fs::absolute(r.out_path).string()) << "\n"
+    << "set xlabel "
+    << quoted(r.x == "time_ps" || r.x == "step" ? axis_label({r.x}) : legend_of(r.x)) << "\n"
+    << line_types() << "set grid\n";
+  const char* style = frames.size() > 60 ? "with lines lw 1.8" : "with linespoints ps 0.6";
+  if (!r.energy_overview) {
+    // Two units: the second on a right-hand axis; more: one axis named by all of them.
+    std::vector<std::string> units;
+    for (const std::string& c : r.selected)
+      if (const Unit* u = unit_of(c);
+          u && std::find(units.begin(), units.end(), u->unit) == units.end())
+        units.push_back(u->unit);
+    std::vector<std::string> left = r.selected, right;
+    if (units.size() == 2) {
+      left.clear();
+      for (const std::string& c : r.selected)
+        (unit_of(c) && unit_of(c)->unit == units[1] ? right : left).push_back(c);
+      s << "set y2label " << quoted(axis_label(right)) << "\nset ytics nomirror\nset y2tics\n";
+    }
+    s << "set title " << quoted(r.title) << "\n"
+      << "set ylabel "
+      << quoted(r.selected.size() == 1 ? legend_of(r.selected[0]) : axis_label(left)) << "\n"
+      << "set key outside right top\n";
+    std::vector<std::size_t> all(r.selected.size());
+    for (std::size_t k = 0; k < all.size(); ++k) all[k] = k;
+    plot_line(s, r, data, all, style, units.size() == 2 ? units[1] : "");
+    s << "set output\n";
+    return s.str();
+  }
+  // The energy overview: changes from the first frame, one panel per group; a component that
+  // never changes is left out (named below the title).
+  std::vector<std::vector<std::size_t>> panels(energy_groups().size());
+  std::vector<std::size_t> flat;
+  for (std::size_t k = 0; k < r.selected.size(); ++k) {
+    const std::size_t c = column_index(r.columns, r.selected[k]);
+    const bool changes = std::any_of(frames.begin(), frames.end(), [&](const SeriesFrame& f) {
+      return f.values[c] != frames.front().values[c];
+    });
+    (changes ? panels[group_of(r.selected[k])] : flat).push_back(k);
+  }
+  std::vector<std::size_t> shown;
+  for (std::size_t g = 0; g < panels.size(); ++g)
+    if (!panels[g].empty()) shown.push_back(g);
+  const std::size_t cols = shown.size() > 1 ? 2 : 1, rows = (shown.size() + cols - 1) / cols;
+  std::vector<std::string> unchanged;
+  for (std::size_t k : flat) unchanged.push_back(words_of(r.selected[k]));
+  s << "set multiplot layout " << std::max<std::size_t>(rows, 1) << "," << cols << " title "
+    << quoted(r.title + ": energy changes from the start" +
+              (unchanged.empty() ? "" : "\n(unchanged, not drawn: " + join(unchanged, ", ") + ")"))
+    << "\nset key top left box opaque\nset ylabel 'change from start (eV)'\n";
+  for (std::size_t g : shown) {
+    s << "set title " << quoted(energy_groups()[g].title) << "\n";
+    plot_line(s, r, data, panels[g], style, "");
+  }
+  if (shown.empty()) s << "set title 'no energy changed'\nplot 0 notitle\n";
+  s << "unset multiplot\nset output\n";
   return s.str();
 }
 
@@ -277,10 +403,19 @@ void render_plot(const PlotRequest& request, const std::vector<SeriesFrame>& fra
     throw PlotError("cannot create the directory of '" + request.out_path + "': " + ec.message());
   {
     std::ofstream os(script);
-    os << script_text(request, data, frames.size());
+    os << script_text(request, data, frames);
     if (!os.flush()) throw PlotError("cannot write the gnuplot script to '" + script + "'");
   }
+  if (fs::is_directory(request.out_path, ec))
+    throw PlotError("cannot write the picture '" + request.out_path + "': it is a directory");
   fs::remove(request.out_path, ec);  // so that a stale picture never passes for a new one
+  {
+    // Writable? Checked here so that the error names the file, not gnuplot's script line.
+    std::ofstream probe(request.out_path, std::ios::binary | std::ios::trunc);
+    if (!probe)
+      throw PlotError("cannot write the picture '" + request.out_path +
+                      "': " + std::strerror(errno));
+  }
   const int status = run_gnuplot(gnuplot_binary(), script, log);
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
     throw PlotError("gnuplot failed (" +

@@ -20,6 +20,10 @@ struct PlotRequest {
   std::vector<std::string> selected;  // the columns to draw (see select_columns)
   std::string x = "time_ps";          // horizontal axis: time_ps, step or a column
   std::string out_path;               // .png or .svg
+  // The default picture of a job (no --columns): the selected energies as changes from the first
+  // frame, in panels by group (bond terms; van der Waals and contact; kinetic; work, dissipation
+  // and balance), components that never change left out and named.
+  bool energy_overview = false;
 };
 
 // The gnuplot terminal for a picture: "pngcairo" for .png, "svg" for .svg (any case); a
@@ -38,7 +42,8 @@ void check_x_column(const std::vector<std::string>& available, const std::string
 // "energy (eV)"; "time_ps" -> "time (ps)"; a column without a known unit suffix -> its name.
 std::string axis_label(const std::vector<std::string>& columns);
 
-// Draws the selected columns against x with gnuplot ($MDEM_GNUPLOT, else `gnuplot` on PATH).
+// Draws the selected columns against x with gnuplot, legends in words with units; columns of two
+// units get a left and a right axis ($MDEM_GNUPLOT, else `gnuplot` on PATH).
 // Throws PlotError (gnuplot missing: says to install gnuplot-nox).
 void render_plot(const PlotRequest& request, const std::vector<SeriesFrame>& frames);
 

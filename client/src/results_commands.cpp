@@ -336,6 +336,7 @@ int run_plot(const std::vector<std::string>& args, std::ostream& out) {
   request.columns = store->columns(job.id);
   request.selected =
       select_columns(request.columns, given.count("--columns") ? given["--columns"] : "");
+  request.energy_overview = !given.count("--columns");
   if (given.count("--x")) request.x = given["--x"];
   check_x_column(request.columns, request.x);
   request.out_path = given.count("--out") ? given["--out"] : job.id + ".png";

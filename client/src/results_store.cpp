@@ -6,6 +6,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -74,6 +75,8 @@ CREATE TABLE snapshots (
   idx BLOB NOT NULL,
   scalar_names TEXT NOT NULL,
   scalars BLOB NOT NULL,
+  v BLOB NOT NULL DEFAULT x'',
+  bonds BLOB NOT NULL DEFAULT x'',
   UNIQUE (job_id, seq)
 );
 )sql";
@@ -83,7 +86,9 @@ CREATE TABLE snapshots (
 // the version stays 1 and an older mdem still reads the file.
 // frames.vals: float64 per column. snapshots: x = float64 x,y,z per element; q = float64
 // w,x,y,z; radius float64; kind, tube, idx int32; scalar_names a JSON array; scalars float64,
-// n values per name in the order of the names.
+// n values per name in the order of the names; v float64 vx,vy,vz per element (empty: not
+// recorded); bonds int32 i, j, state (0 intact, 1 yielded, 2 broken) per bond. snapshots.v and
+// snapshots.bonds came after version 1 too (kSnapshotMigrations).
 
 // The series in a long form that plain SQL reads (docs/results-db.md): frame_values holds frame
 // seq's value of column col (its index in jobs.columns_json) beside the packed frames.vals (which
@@ -134,6 +139,12 @@ constexpr Migration kMigrations[] = {
     {"server", "server TEXT NOT NULL DEFAULT ''", "''"},
     {"last_seq", "last_seq INTEGER NOT NULL DEFAULT 0", "0"},
     {"runner", "runner TEXT NOT NULL DEFAULT ''", "''"},
+};
+
+// Columns added to the snapshots table since the first schema, in the order they are read.
+constexpr Migration kSnapshotMigrations[] = {
+    {"v", "v BLOB NOT NULL DEFAULT x''", "x''"},
+    {"bonds", "bonds BLOB NOT NULL DEFAULT x''", "x''"},
 };
 
 constexpr const char* kSnapshotColumns =
@@ -257,8 +268,9 @@ std::string runner_text(const std::string& runner) {
 // of the file's schema. ResultsStore::Impl is this, named outside the class so that the helpers
 // below can take it. The layer's SqliteError becomes StoreError at the public interface (call).
 struct StoreDb : SqliteDb {
-  std::set<std::string> missing;  // columns of kMigrations an old read-only file lacks
-  bool remote_columns = true;     // jobs has server and last_seq (false: an old read-only file)
+  std::set<std::string> missing;           // columns of kMigrations an old read-only file lacks
+  std::set<std::string> missing_snapshot;  // columns of kSnapshotMigrations it lacks
+  bool remote_columns = true;  // jobs has server and last_seq (false: an old read-only file)
 
   explicit StoreDb(std::string path)
       : SqliteDb(std::move(path), "results database", "NORMAL", kBusyTimeoutMs, refuse_foreign) {}
@@ -267,6 +279,13 @@ struct StoreDb : SqliteDb {
     std::string cols = kFirstJobColumns;
     for (const Migration& m : kMigrations)
       cols += std::string(", ") + (missing.count(m.column) ? m.fallback : m.column);
+    return cols;
+  }
+  // The columns of a snapshot, in read_snapshot's order.
+  std::string snapshot_columns() const {
+    std::string cols = kSnapshotColumns;
+    for (const Migration& m : kSnapshotMigrations)
+      cols += std::string(", ") + (missing_snapshot.count(m.column) ? m.fallback : m.column);
     return cols;
   }
   void require_remote_columns() const {
@@ -318,6 +337,8 @@ void check_schema_version(Impl& db) {
 bool needs_migration(Impl& db) {
   for (const Migration& m : kMigrations)
     if (!db.has_column("jobs", m.column)) return true;
+  for (const Migration& m : kSnapshotMigrations)
+    if (!db.has_column("snapshots", m.column)) return true;
   return !db.has_table("frame_values");
 }
 
@@ -366,6 +387,8 @@ void migrate(Impl& db) {
   if (sqlite3_db_readonly(db.handle(), "main") == 1) {
     for (const Migration& m : kMigrations)
       if (!db.has_column("jobs", m.column)) db.missing.insert(m.column);
+    for (const Migration& m : kSnapshotMigrations)
+      if (!db.has_column("snapshots", m.column)) db.missing_snapshot.insert(m.column);
     db.remote_columns = !db.missing.count("server") && !db.missing.count("last_seq");
     return;
   }
@@ -374,6 +397,10 @@ void migrate(Impl& db) {
     if (!db.has_column("jobs", m.column))  // another process may have added it meanwhile
       db.exec((std::string("ALTER TABLE jobs ADD COLUMN ") + m.definition).c_str(),
               std::string("cannot add the column '") + m.column + "' to the jobs table");
+  for (const Migration& m : kSnapshotMigrations)
+    if (!db.has_column("snapshots", m.column))
+      db.exec((std::string("ALTER TABLE snapshots ADD COLUMN ") + m.definition).c_str(),
+              std::string("cannot add the column '") + m.column + "' to the snapshots table");
   add_long_series(db);
   t.commit();
 }
@@ -434,6 +461,11 @@ void check_snapshot_sizes(const Impl& db, const Snapshot& s) {
   check_size(db, s.kind.size(), n, "kind");
   check_size(db, s.tube.size(), n, "tube");
   check_size(db, s.index.size(), n, "index");
+  if (!s.v.empty()) check_size(db, s.v.size(), n, "v");
+  for (const SnapshotBond& b : s.bonds)
+    if (b.i < 0 || b.j < 0 || static_cast<std::size_t>(std::max(b.i, b.j)) >= n)
+      throw StoreError(db.where() + ": snapshot bond " + std::to_string(b.i) + "-" +
+                       std::to_string(b.j) + " names no element of " + std::to_string(n));
   std::set<std::string> names;
   for (const auto& [name, values] : s.scalars) {
     check_size(db, values.size(), n, name);
@@ -451,6 +483,8 @@ void check_snapshot_values(const Impl& db, const Snapshot& s) {
     for (int k = 0; k < 3; ++k) require_finite(db, s.x[i][k], "snapshot field 'x'" + el);
     for (int k = 0; k < 4; ++k) require_finite(db, s.q[i].coeffs()[k], "snapshot field 'q'" + el);
     require_finite(db, s.radius[i], "snapshot field 'radius'" + el);
+    if (!s.v.empty())
+      for (int k = 0; k < 3; ++k) require_finite(db, s.v[i][k], "snapshot field 'v'" + el);
     for (const auto& [name, values] : s.scalars)
       require_finite(db, values[i], "snapshot scalar '" + name + "'" + el);
   }
@@ -558,6 +592,25 @@ void decode_scalars(const Impl& db, const Query& q, std::size_t n, Snapshot& s) 
   }
 }
 
+// Velocities (columns 11: none or n) and bonds (12).
+void decode_motion(const Impl& db, const Query& q, std::size_t n, Snapshot& s) {
+  const std::string v = q.blob(11), bonds = q.blob(12);
+  if (!v.empty()) {
+    check_blob(db, v, 24 * n, "v");
+    s.v.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+      s.v[i] = Vec3(get_f64(v, 3 * i), get_f64(v, 3 * i + 1), get_f64(v, 3 * i + 2));
+  }
+  if (bonds.size() % 12 != 0) check_blob(db, bonds, bonds.size() / 12 * 12, "bonds");
+  for (std::size_t k = 0; k < bonds.size() / 12; ++k) {
+    const SnapshotBond b{get_i32(bonds, 3 * k), get_i32(bonds, 3 * k + 1),
+                         static_cast<BondState>(get_i32(bonds, 3 * k + 2))};
+    if (b.i < 0 || b.j < 0 || static_cast<std::size_t>(std::max(b.i, b.j)) >= n)
+      throw StoreError(db.where() + ": corrupt snapshot: a bond names no element");
+    s.bonds.push_back(b);
+  }
+}
+
 Snapshot read_snapshot(const Impl& db, const Query& q) {
   Snapshot s;
   s.step = q.integer(0);
@@ -568,6 +621,7 @@ Snapshot read_snapshot(const Impl& db, const Query& q) {
   s.tube = decode_ints(db, q.blob(7), n, "tube");
   s.index = decode_ints(db, q.blob(8), n, "index");
   decode_scalars(db, q, n, s);
+  decode_motion(db, q, n, s);
   return s;
 }
 
@@ -588,6 +642,13 @@ void bind_snapshot(Query& q, const Snapshot& s) {
   q.bind_blob(6, x).bind_blob(7, qq).bind_blob(8, encode(s.radius));
   q.bind_blob(9, encode(s.kind)).bind_blob(10, encode(s.tube)).bind_blob(11, encode(s.index));
   q.bind(12, names.dump()).bind_blob(13, scalars);
+  std::string v, bonds;
+  v.reserve(24 * s.v.size());
+  for (const Vec3& vi : s.v)
+    for (int k = 0; k < 3; ++k) put_f64(v, vi[k]);
+  for (const SnapshotBond& b : s.bonds)
+    for (std::int32_t x : {b.i, b.j, static_cast<std::int32_t>(b.state)}) put_i32(bonds, x);
+  q.bind_blob(14, v).bind_blob(15, bonds);
 }
 
 void check_state(const Impl& db, const std::string& id, const std::string& state) {
@@ -628,7 +689,7 @@ void write_frames(Impl& db, const std::string& id, const std::vector<SeriesFrame
 void write_snapshot(Impl& db, const std::string& id, const Snapshot& snap) {
   Query q(db,
           std::string("INSERT INTO snapshots (job_id, seq, ") + kSnapshotColumns +
-              ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+              ", v, bonds) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
           "cannot write a snapshot of job '" + id + "'");
   q.bind(1, id).bind(2, next_seq(db, "snapshots", id));
   bind_snapshot(q, snap);
@@ -899,10 +960,8 @@ std::size_t ResultsStore::snapshot_count(const std::string& id) const {
 
 std::vector<Snapshot> ResultsStore::snapshots(const std::string& id) const {
   return impl_->call([&](StoreDb& db) {
-    Query q(
-        db,
-        std::string("SELECT ") + kSnapshotColumns + " FROM snapshots WHERE job_id = ? ORDER BY seq",
-        "cannot read the snapshots of job '" + id + "'");
+    Query q(db, "SELECT " + db.snapshot_columns() + " FROM snapshots WHERE job_id = ? ORDER BY seq",
+            "cannot read the snapshots of job '" + id + "'");
     q.bind(1, id);
     std::vector<Snapshot> snaps;
     while (q.step()) snaps.push_back(read_snapshot(db, q));
@@ -913,7 +972,7 @@ std::vector<Snapshot> ResultsStore::snapshots(const std::string& id) const {
 std::optional<Snapshot> ResultsStore::snapshot(const std::string& id, std::size_t k) const {
   return impl_->call([&](StoreDb& db) -> std::optional<Snapshot> {
     Query q(db,
-            std::string("SELECT ") + kSnapshotColumns +
+            "SELECT " + db.snapshot_columns() +
                 " FROM snapshots WHERE job_id = ? ORDER BY seq LIMIT 1 OFFSET ?",
             "cannot read a snapshot of job '" + id + "'");
     q.bind(1, id).bind(2, static_cast<long>(k));

@@ -1,5 +1,6 @@
 #include "mdem/snapshot_proto.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -15,6 +16,14 @@ v1::SnapshotData snapshot_to_proto(const Snapshot& s) {
   for (std::size_t i = 0; i < n; ++i) {
     for (int k = 0; k < 3; ++k) d.add_x(s.x[i][k]);
     for (double c : {s.q[i].w(), s.q[i].x(), s.q[i].y(), s.q[i].z()}) d.add_q(c);
+  }
+  for (const Vec3& v : s.v)
+    for (int k = 0; k < 3; ++k) d.add_v(v[k]);
+  for (const SnapshotBond& b : s.bonds) {
+    v1::Bond* pb = d.add_bonds();
+    pb->set_i(b.i);
+    pb->set_j(b.j);
+    pb->set_state(static_cast<v1::Bond::State>(b.state));
   }
   d.mutable_radius()->Add(s.radius.begin(), s.radius.end());
   d.mutable_kind()->Add(s.kind.begin(), s.kind.end());
@@ -41,6 +50,7 @@ Snapshot snapshot_from_proto(const v1::SnapshotData& d) {
   check("kind", d.kind_size(), n);
   check("tube", d.tube_size(), n);
   check("index", d.index_size(), n);
+  if (d.v_size() != 0) check("v", d.v_size(), 3 * n);
   Snapshot s;
   s.step = d.step();
   s.time_ps = d.time_ps();
@@ -49,6 +59,19 @@ Snapshot snapshot_from_proto(const v1::SnapshotData& d) {
   for (std::size_t i = 0; i < n; ++i) {
     s.x[i] = Vec3(d.x(3 * i), d.x(3 * i + 1), d.x(3 * i + 2));
     s.q[i] = Quat(d.q(4 * i), d.q(4 * i + 1), d.q(4 * i + 2), d.q(4 * i + 3));
+  }
+  if (d.v_size() != 0) {
+    s.v.resize(n);
+    for (std::size_t i = 0; i < n; ++i) s.v[i] = Vec3(d.v(3 * i), d.v(3 * i + 1), d.v(3 * i + 2));
+  }
+  for (const v1::Bond& b : d.bonds()) {
+    if (b.i() < 0 || b.j() < 0 || static_cast<std::size_t>(std::max(b.i(), b.j())) >= n ||
+        !v1::Bond::State_IsValid(b.state()))
+      throw std::invalid_argument("snapshot at step " + std::to_string(d.step()) + ": bond " +
+                                  std::to_string(b.i()) + "-" + std::to_string(b.j()) +
+                                  " names no element of " + std::to_string(n) +
+                                  " or has an unknown state");
+    s.bonds.push_back({b.i(), b.j(), static_cast<BondState>(b.state())});
   }
   s.radius.assign(d.radius().begin(), d.radius().end());
   s.kind.assign(d.kind().begin(), d.kind().end());

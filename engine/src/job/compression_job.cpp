@@ -333,7 +333,16 @@ std::vector<double> CompressionJob::observe() {
   return v;
 }
 
-void CompressionJob::decorate(Snapshot& s) const { s.scalars.emplace_back("slip_nm", slip()); }
+void CompressionJob::decorate(Snapshot& s) const {
+  s.scalars.emplace_back("slip_nm", slip());
+  if (!bonds_) return;
+  s.bonds.reserve(bonds_->bonds().size());
+  for (const GrainBondRecord& b : bonds_->bonds())
+    s.bonds.push_back({static_cast<std::int32_t>(b.bond.i), static_cast<std::int32_t>(b.bond.j),
+                       b.broken    ? BondState::Broken
+                       : b.yielded ? BondState::Yielded
+                                   : BondState::Intact});
+}
 
 Summary CompressionJob::summary() {
   if (!built())  // stopped while packing: how far it got

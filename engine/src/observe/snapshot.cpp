@@ -10,6 +10,7 @@ Snapshot capture_snapshot(const Elements& el, long step, double time_ps) {
   s.time_ps = time_ps;
   s.x = el.x;
   s.q = el.q;
+  s.v = el.v;
   s.radius = el.radius;
   const std::size_t n = el.size();
   s.kind.resize(n);
