@@ -262,6 +262,7 @@ std::vector<T> pick(const std::vector<std::size_t>& ids, const std::vector<T>& a
 // Cells as VTK wants them: connectivity (point ids) and offsets (one past each cell's end).
 void add_cells(VtkPiece& piece, const char* section,
                const std::vector<std::vector<std::int64_t>>& cells) {
+  if (cells.empty()) return;  // a section without cells is left out, as VTK itself writes it
   std::vector<std::int64_t> connectivity, offsets;
   for (const auto& c : cells) {
     connectivity.insert(connectivity.end(), c.begin(), c.end());
