@@ -82,6 +82,25 @@ inline Vec3 displacement(const Domain& domain, const Vec3& xi, const Vec3& xj) {
     return xj - xi;
 }
 
+// The kernel's per-evaluation cache of every element (a worksharing loop of the calling team).
+template <class K>
+inline void prepare_all(const K& k, const Elements& el, long n) {
+  if constexpr (requires { k.prepare(el, 0L); }) {
+#pragma omp for schedule(static)
+    for (long i = 0; i < n; ++i) k.prepare(el, i);
+  }
+}
+
+// The thread's force and torque buffers: the damping slots for a dissipative kernel.
+template <class K>
+inline Vec3* force_buffer(ForceSink& sink, int tid) {
+  return K::kDissipative ? sink.damping_force(tid) : sink.force(tid);
+}
+template <class K>
+inline Vec3* torque_buffer(ForceSink& sink, int tid) {
+  return K::kDissipative ? sink.damping_torque(tid) : sink.torque(tid);
+}
+
 // flatten: the kernel's pair() inlines into the loop (GCC would otherwise call it per pair and
 // pass the result through memory: 8 % more instructions on the twisted rope than the old
 // hand-written loops; flattened, 3.5 % fewer).
@@ -94,15 +113,12 @@ template <bool kPeriodic, bool kFilter, class K>
   const long n = static_cast<long>(el.size());
 #pragma omp parallel num_threads(sink.threads()) if (threaded)
   {
-    if constexpr (requires { k.prepare(el, 0L); }) {
-#pragma omp for schedule(static)
-      for (long i = 0; i < n; ++i) k.prepare(el, i);
-    }
+    prepare_all(k, el, n);
     const int tid = omp_get_thread_num();
     // The thread's own buffers alias nothing the kernel reads (positions, caches, parameters),
     // so the compiler may keep those in registers across the stores.
-    Vec3* __restrict f = K::kDissipative ? sink.damping_force(tid) : sink.force(tid);
-    Vec3* __restrict t = K::kDissipative ? sink.damping_torque(tid) : sink.torque(tid);
+    Vec3* __restrict f = force_buffer<K>(sink, tid);
+    Vec3* __restrict t = torque_buffer<K>(sink, tid);
     double energy = 0.0;
 #pragma omp for schedule(static, 64)
     for (long i = 0; i < n; ++i) {
@@ -145,13 +161,10 @@ void run_batched(const K& k, const Elements& el, const NeighborList& list, Force
   const double rc2 = k.cutoff() * k.cutoff();
 #pragma omp parallel num_threads(sink.threads()) if (threaded)
   {
-    if constexpr (requires { k.prepare(el, 0L); }) {
-#pragma omp for schedule(static)
-      for (long i = 0; i < n; ++i) k.prepare(el, i);
-    }
+    prepare_all(k, el, n);
     const int tid = omp_get_thread_num();
-    Vec3* __restrict f = K::kDissipative ? sink.damping_force(tid) : sink.force(tid);
-    Vec3* __restrict t = K::kDissipative ? sink.damping_torque(tid) : sink.torque(tid);
+    Vec3* __restrict f = force_buffer<K>(sink, tid);
+    Vec3* __restrict t = torque_buffer<K>(sink, tid);
     double energy = 0.0;
     PairBatch b;
     const auto flush = [&] {
