@@ -167,13 +167,25 @@ TEST(NpCntContact, DashpotStiffnessIsTheSideOnCurvatureAtTheMinimum) {
   EXPECT_NEAR(k.equilibrium_stiffness(), fd, 1e-5 * fd);
   EXPECT_NEAR(k.equilibrium_stiffness(), 4.4545, 1e-4);
   EXPECT_LT(std::abs(k.evaluate(Vec3(0, R0, 0), Vec3::Zero(), Vec3::UnitX()).f1.y()), 1e-6);
-  // The dashpots take these stiffnesses and the contacts' cutoffs.
-  EXPECT_EQ(np_cnt_dashpot().params().stiffness, k.equilibrium_stiffness());
+  // The dashpots take the contacts' cutoffs, and this curvature when asked to.
   EXPECT_EQ(np_cnt_dashpot().params().cutoff, 4 * kT);
-  EXPECT_EQ(np_np_dashpot().params().stiffness, NpNpKernel().equilibrium_stiffness());
   EXPECT_EQ(np_np_dashpot().params().cutoff, 8.0);
+  EXPECT_EQ(np_cnt_dashpot(0.03, {}, k.equilibrium_stiffness()).params().stiffness,
+            k.equilibrium_stiffness());
   EXPECT_EQ(np_cnt_dashpot().owner(), "np_cnt_contact");
   EXPECT_EQ(np_np_dashpot().owner(), "np_np_contact");
+}
+
+TEST(NpContactDamping, DefaultCoefficientsAreTensileMdSection34s) {
+  // tensile.md §3.4: ψ = 0.03, k = 100 eV/nm² on every contact, m the pair's reduced mass, so
+  // c = 2.22 eV·ps/nm² (CNT–CNT), 3.11 (NP–CNT), 14.2 (NP–NP).
+  const double m_seg = cnt_segment(Vec3::Zero(), Quat::Identity(), 0, 0).mass;
+  const NpDampingParams cnt = np_cnt_dashpot().params(), npnp = np_np_dashpot().params();
+  EXPECT_EQ(cnt.stiffness, 100.0);
+  EXPECT_EQ(npnp.stiffness, 100.0);
+  EXPECT_NEAR(dashpot_coefficient(0.03, m_seg, m_seg, 100.0), 2.22, 0.005);
+  EXPECT_NEAR(dashpot_coefficient(cnt.ratio, np::kMass, m_seg, cnt.stiffness), 3.11, 0.005);
+  EXPECT_NEAR(dashpot_coefficient(npnp.ratio, np::kMass, np::kMass, npnp.stiffness), 14.2, 0.05);
 }
 
 TEST(NpNpContact, CheckValuesOfModelMd) {

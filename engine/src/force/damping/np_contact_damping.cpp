@@ -43,18 +43,18 @@ void NpDashpotKernel::stiffness(const Elements& el, std::size_t i, std::size_t j
   s.c[j] += c;
 }
 
-NpDashpotKernel np_cnt_dashpot(double ratio, const NpCntParams& contact) {
+NpDashpotKernel np_cnt_dashpot(double ratio, const NpCntParams& contact, double stiffness) {
   const NpCntKernel k(contact);
   return NpDashpotKernel("np_cnt_damping", k.name(),
                          KindPairs::of(ElementKind::Nanoparticle, ElementKind::CntSegment),
-                         {ratio, k.equilibrium_stiffness(), contact.cutoff()});
+                         {ratio, stiffness, contact.cutoff()});
 }
 
-NpDashpotKernel np_np_dashpot(double ratio, const NpNpParams& contact) {
+NpDashpotKernel np_np_dashpot(double ratio, const NpNpParams& contact, double stiffness) {
   const NpNpKernel k(contact);
   return NpDashpotKernel("np_np_damping", k.name(),
                          KindPairs::of(ElementKind::Nanoparticle, ElementKind::Nanoparticle),
-                         {ratio, k.equilibrium_stiffness(), contact.cutoff()});
+                         {ratio, stiffness, contact.cutoff()});
 }
 
 template class PairModel<NpDashpotKernel>;

@@ -9,11 +9,11 @@
 // (viscous_contact_damping.h): rigid motions are not damped, linear and angular momentum are
 // conserved, and the NP gets no torque.
 //
-// The stiffness k of c = 2ψ√(m_eff k) is, by default, the curvature of the contact's own law at
-// its equilibrium (np_cnt_contact.h, np_np_contact.h: 555.9 eV/nm² NP–NP, V''(D0)/ρ_NC² NP–CNT),
-// so ψ is the damping ratio of the pair's own small oscillation about its minimum. (tensile.md's
-// defaults table instead reuses the CNT–CNT k = 100 eV/nm² for NP pairs; set `stiffness` to run
-// that.)
+// The stiffness k of c = 2ψ√(m_eff k) is, by default, the CNT–CNT dashpot's k = 100 eV/nm², as
+// tensile.md §3.4 and its defaults table settle (c = 3.11 eV·ps/nm² NP–CNT, 14.2 NP–NP, with the
+// pairs' reduced masses). The laws' own equilibrium curvatures (NpCntKernel/NpNpKernel::
+// equilibrium_stiffness(): 4.45 eV/nm² side-on NP–CNT, 555.9 NP–NP) are the alternative a user can
+// set in `stiffness` to make ψ the damping ratio of each pair's own small oscillation.
 #include <string_view>
 
 #include "mdem/force/contact/np_cnt_contact.h"
@@ -23,9 +23,9 @@
 namespace mdem {
 
 struct NpDampingParams {
-  double ratio = 0.03;     // ψ (the CNT–CNT dashpot's, thesis)
-  double stiffness = 0.0;  // k (eV/nm²); must be > 0 (the factories set the contact's curvature)
-  double cutoff = 0.0;     // acts on pairs closer than this (nm): the contact's cutoff
+  double ratio = 0.03;       // ψ (the CNT–CNT dashpot's, thesis)
+  double stiffness = 100.0;  // k (eV/nm²), > 0: tensile.md §3.4, as the CNT–CNT dashpot
+  double cutoff = 0.0;       // acts on pairs closer than this (nm): the contact's cutoff
 };
 
 // The dashpot pair kernel of one NP contact (pair_driver.h).
@@ -59,9 +59,11 @@ class NpDashpotKernel {
 };
 
 // The dashpots of the NP–CNT and NP–NP contacts with parameters `contact`: cutoff the contact's,
-// stiffness its equilibrium curvature.
-NpDashpotKernel np_cnt_dashpot(double ratio = 0.03, const NpCntParams& contact = {});
-NpDashpotKernel np_np_dashpot(double ratio = 0.03, const NpNpParams& contact = {});
+// stiffness k (eV/nm²).
+NpDashpotKernel np_cnt_dashpot(double ratio = 0.03, const NpCntParams& contact = {},
+                               double stiffness = NpDampingParams{}.stiffness);
+NpDashpotKernel np_np_dashpot(double ratio = 0.03, const NpNpParams& contact = {},
+                              double stiffness = NpDampingParams{}.stiffness);
 
 extern template class PairModel<NpDashpotKernel>;
 
