@@ -148,6 +148,24 @@ TEST(TensileKinematics, CyclicGripsFollowTheClosedForm) {
   expect_grips_on_closed_form(cyclic(100, 2), 137);  // in the second cycle
 }
 
+TEST(TensileKinematics, StartOnASystemThatHasRun) {
+  // A loading started after 40 ps of an unloaded run (a relaxation) counts its strain from there.
+  Elements el = tube();
+  const GripSelection g = select_grips(el);
+  System sys = tube_system(std::move(el));
+  sys.run(steps_for(40));
+  const double x0 = sys.elements().x[g.right.front()].x();
+  auto p = std::make_shared<TensileProtocol>(monotonic(1e-4, 100));
+  p->start(sys);
+  EXPECT_DOUBLE_EQ(p->start_time(), sys.time());
+  sys.add_updater(p);
+  sys.run(steps_for(60));
+  const double u = sys.elements().x[g.right.front()].x() - x0;
+  EXPECT_NEAR(u, 0.5 * kL0 * p->strain_after(p->elapsed(sys.time())), 1e-9 * std::abs(u));
+  EXPECT_NEAR(p->elapsed(sys.time()), 60, 1e-9);
+  EXPECT_EQ(p->phase(sys.time()), "ramp");
+}
+
 TEST(TensileKinematics, VelocityIsC1AcrossTheRampEnd) {
   const double rate = 1e-4, ta = 100;
   Elements el = tube();
@@ -259,6 +277,11 @@ TEST(TensileGripStress, QuasiStaticBalanceAndTheTubeModulus) {
   }
   EXPECT_LT(worst, 1e-3);
   EXPECT_GT(s->samples().back().f_left, 0);  // the left grip is pulled towards +x: tension
+  // One sample per ps of system time, from the first evaluation (t = 0), each with ε(t).
+  for (std::size_t k = 0; k < s->samples().size(); ++k) {
+    EXPECT_NEAR(s->samples()[k].t, static_cast<double>(k), 1e-6);
+    EXPECT_EQ(s->samples()[k].strain, p->strain(s->samples()[k].t));
+  }
   std::printf("tube modulus %.4f GPa (hand %.4f), max |F_L+F_R|/|F_L| after 100 ps %.3g\n",
               fit.slope, E_hand, worst);
 }
