@@ -1,8 +1,11 @@
 #include "console.h"
 
+#include <sys/ioctl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <csignal>
+#include <cstdlib>
 #include <iomanip>
 #include <iostream>
 #include <iterator>
@@ -22,9 +25,22 @@ extern "C" void on_interrupt(int sig) {
   g_signal.compare_exchange_strong(none, sig);
 }
 
-constexpr int kBarWidth = 30;
+constexpr int kBarWidth = 30;  // the bar's cells at most
 
 }  // namespace
+
+int terminal_columns() {
+  int cols = 0;
+  winsize ws{};
+  if (ioctl(STDERR_FILENO, TIOCGWINSZ, &ws) == 0 && ws.ws_col > 0) {
+    cols = ws.ws_col;
+  } else if (const char* env = std::getenv("COLUMNS")) {
+    char* end = nullptr;
+    const long c = std::strtol(env, &end, 10);
+    if (end != env && *end == '\0' && c > 0 && c < 10000) cols = static_cast<int>(c);
+  }
+  return std::max(20, cols ? cols : 80);
+}
 
 void ProgressReporter::operator()(const JobProgress& p) {
   if (quiet_ || p.total_steps <= 0) return;
@@ -34,25 +50,39 @@ void ProgressReporter::operator()(const JobProgress& p) {
   const double done = frac - *frac0_;
   const double eta = done > 0 ? wall * (1 - frac) / done : 0;
   if (tty_) {
-    const int filled = static_cast<int>(frac * kBarWidth);
-    err_ << "\r[" << std::string(filled, '#') << std::string(kBarWidth - filled, '-') << "] "
-         << std::setw(3) << static_cast<int>(frac * 100) << "%  t " << std::fixed
+    std::ostringstream tail;
+    tail << "] " << std::setw(3) << static_cast<int>(frac * 100) << "%  t " << std::fixed
          << std::setprecision(1) << p.time_ps << " ps  " << std::setw(9) << p.phase << "  ETA "
-         << clock(eta) << "   " << std::defaultfloat << std::flush;
+         << clock(eta);
+    // The line fills columns - 1 (the last column would wrap on some terminals): the bar takes
+    // what the text leaves, up to kBarWidth cells; a terminal too narrow for a bar of 5 cells
+    // gets the text cut instead.
+    const int room = columns_ - 1;
+    const int cells = std::clamp(room - 1 - static_cast<int>(tail.str().size()), 5, kBarWidth);
+    const int filled = static_cast<int>(frac * cells);
+    std::string line(1, '[');
+    line.append(filled, '#').append(cells - filled, '-').append(tail.str());
+    line.resize(room, ' ');
+    err_ << "\r" << line << std::flush;
     bar_open_ = p.step != p.total_steps;
     if (!bar_open_) err_ << "\n";
   } else if (p.step == 0 || static_cast<int>(frac * 10) > last_decile_) {
     last_decile_ = static_cast<int>(frac * 10);
-    err_ << "  step " << p.step << "/" << p.total_steps << "  t = " << std::fixed
-         << std::setprecision(1) << p.time_ps << " ps  " << p.phase << "  wall " << clock(wall)
-         << "  ETA " << clock(eta) << "\n"
-         << std::defaultfloat;
+    lines_ << "  step " << p.step << "/" << p.total_steps << "  t = " << std::fixed
+           << std::setprecision(1) << p.time_ps << " ps  " << p.phase << "  wall " << clock(wall)
+           << "  ETA " << clock(eta) << "\n"
+           << std::defaultfloat << std::flush;
   }
 }
 
+void ProgressReporter::clear() {
+  if (bar_open_) err_ << "\r" << std::string(columns_ - 1, ' ') << "\r" << std::flush;
+  bar_open_ = false;
+}
+
 void ProgressReporter::note(const std::string& line) {
-  if (bar_open_) err_ << "\r" << std::string(kBarWidth + 48, ' ') << "\r";
-  err_ << line << "\n" << std::flush;
+  clear();
+  lines_ << line << "\n" << std::flush;
 }
 
 void ProgressReporter::finish() {

@@ -12,16 +12,27 @@
 
 namespace mdem::cli {
 
+// The terminal's width in columns: standard error's window size (ioctl TIOCGWINSZ), else
+// $COLUMNS, else 80; at least 20.
+int terminal_columns();
+
 // Progress: a redrawn bar with ETA on a terminal, a plain line every 10 % otherwise. The ETA
 // extrapolates from the first progress seen, so a watch that joins a job half-way is not misled
-// by the part it did not see.
+// by the part it did not see. The bar is exactly columns - 1 characters wide (the bar shrinks
+// first, then the text is cut), so it never wraps; plain lines and notes go to `lines` when
+// given (a run's log tee), else to `err`; the bar and its wipes go to `err` only.
 class ProgressReporter {
  public:
-  ProgressReporter(std::ostream& err, bool tty, bool quiet) : err_(err), tty_(tty), quiet_(quiet) {}
+  ProgressReporter(std::ostream& err, bool tty, bool quiet, std::ostream* lines = nullptr,
+                   int columns = terminal_columns())
+      : err_(err), lines_(lines ? *lines : err), tty_(tty), quiet_(quiet), columns_(columns) {}
   void operator()(const JobProgress& p);
   // A line of text (a log line, a notice) between progress updates: on a terminal the bar is
   // wiped first and redrawn by the next update.
   void note(const std::string& line);
+  // Wipes a bar left on the terminal (before other text is written there); the next update
+  // draws it again.
+  void clear();
   // Ends a bar left open (a job that stopped before its last step).
   void finish();
 
@@ -29,7 +40,9 @@ class ProgressReporter {
   static std::string clock(double s);
   double seconds() const;
   std::ostream& err_;
+  std::ostream& lines_;
   bool tty_, quiet_;
+  int columns_;
   bool bar_open_ = false;
   int last_decile_ = -1;
   std::optional<double> frac0_;  // the first fraction seen
