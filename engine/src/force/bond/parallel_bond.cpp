@@ -19,15 +19,56 @@ void require_stiffness(double v, const char* field) {
                                 " must be finite and >= 0, got " + std::to_string(v));
 }
 
+// The rotation vector θ of a quaternion (the shortest rotation, |θ| in [0, π]) and the
+// coefficient c of K² in the inverse left Jacobian of SO(3), Jl⁻¹(θ) = I − ½K + cK² (K = [θ]×,
+// c = 1/a² − (1 + cos a)/(2a sin a), a = |θ|), from one quaternion formula: with w = cos(a/2),
+// s = sin(a/2) (for any scale of q), (1 + cos a)/(2a sin a) = w/(2as), and θ = (a/s)·v.
+// Near zero (t = s/w = tan(a/2) below 0.05, a < 0.1 rad, the common case) both come from their
+// series in t² and a², without a square root or trigonometric call, to full double precision
+// (the first omitted terms are below 1e-18 relative); beyond, one sqrt and one atan2.
+struct RotationLog {
+  Vec3 theta;
+  double c;
+};
+
+RotationLog rotation_log(const Quat& q) {
+  double w = q.w();
+  Vec3 v = q.vec();
+  if (w < 0) {  // shortest rotation
+    w = -w;
+    v = -v;
+  }
+  const double s2 = v.squaredNorm();
+  RotationLog r;
+  if (s2 < 0.0025 * w * w) {
+    // atan(t)/t = Σ (−u)^k/(2k+1), u = t²; then a/s = 2 atan(t)/(t w), a² = 4 u (atan(t)/t)².
+    const double u = s2 / (w * w);
+    const double p =
+        1.0 +
+        u * (-1.0 / 3 +
+             u * (1.0 / 5 + u * (-1.0 / 7 + u * (1.0 / 9 + u * (-1.0 / 11 + u * (1.0 / 13))))));
+    r.theta = (2.0 * p / w) * v;
+    const double a2 = 4.0 * u * p * p;
+    // 1/a² − cot(a/2)/(2a), from cot's Laurent series.
+    r.c = 1.0 / 12 +
+          a2 * (1.0 / 720 + a2 * (1.0 / 30240 + a2 * (1.0 / 1209600 + a2 * (1.0 / 47900160))));
+  } else {
+    const double s = std::sqrt(s2);
+    const double a = 2.0 * std::atan2(s, w);
+    r.theta = (a / s) * v;
+    r.c = 1.0 / (a * a) - w / (2.0 * a * s);
+  }
+  return r;
+}
+
 // The current bond geometry shared by bond_deformation and bond_eval.
 struct Kinematics {
-  Vec3 ai, aj;    // world centre -> bond point arms
-  Vec3 ui, uj;    // world bond directions of the two bodies
-  Vec3 m;         // ui + uj
-  double m_norm;  // |m|
-  Vec3 n;         // m / |m|
-  Vec3 g;         // gap between the two bond points
-  Vec3 theta;     // world rotation vector of R_j R_rel0⁻¹ R_iᵀ
+  Vec3 ai, aj;      // world centre -> bond point arms
+  Vec3 ui, uj;      // world bond directions of the two bodies
+  double inv_m;     // 1 / |ui + uj| (0 at a 180° bend, where n falls back to ui)
+  Vec3 n;           // (ui + uj) / |ui + uj|
+  Vec3 g;           // gap between the two bond points
+  RotationLog rot;  // rotation vector of R_j R_rel0⁻¹ R_iᵀ and its Jacobian coefficient
 };
 
 Kinematics kinematics(const Bond& b, const Vec3& xi, const Quat& qi, const Vec3& xj,
@@ -37,14 +78,20 @@ Kinematics kinematics(const Bond& b, const Vec3& xi, const Quat& qi, const Vec3&
   k.aj = qj * b.cj;
   k.ui = qi * b.ni;
   k.uj = qj * b.nj;
-  k.m = k.ui + k.uj;
-  k.m_norm = k.m.norm();
+  const Vec3 m = k.ui + k.uj;
+  const double m2 = m.squaredNorm();
   // |m| = 0 only when the two bond directions are exactly opposite (a 180° bend); fall back to
   // body i's direction there so the result stays finite.
-  k.n = k.m_norm > 1e-12 ? Vec3(k.m / k.m_norm) : k.ui;
+  if (m2 > 1e-24) {
+    k.inv_m = 1.0 / std::sqrt(m2);
+    k.n = k.inv_m * m;
+  } else {
+    k.inv_m = 0;
+    k.n = k.ui;
+  }
   k.g = (xj + k.aj) - (xi + k.ai);
-  // Conjugates: unit quaternions, and quat_log is scale invariant anyway.
-  k.theta = quat_log(qj * b.q_rel0.conjugate() * qi.conjugate());
+  // Conjugates: unit quaternions, and the log is scale invariant anyway.
+  k.rot = rotation_log(qj * b.q_rel0.conjugate() * qi.conjugate());
   return k;
 }
 
@@ -107,8 +154,8 @@ BondDeformation bond_deformation(const Bond& b, const Vec3& xi, const Quat& qi, 
   d.n = k.n;
   d.u_n = k.g.dot(k.n);
   d.u_s = k.g - d.u_n * k.n;
-  d.theta_t = k.theta.dot(k.n);
-  d.theta_b = k.theta - d.theta_t * k.n;
+  d.theta_t = k.rot.theta.dot(k.n);
+  d.theta_b = k.rot.theta - d.theta_t * k.n;
   return d;
 }
 
@@ -117,14 +164,15 @@ BondDeformation bond_deformation(const Bond& b, const Vec3& xi, const Quat& qi, 
 //   gap:   δg = δx_j + δφ_j×a_j − δx_i − δφ_i×a_i  ⇒ F_j = −G, F_i = G, τ_j = −a_j×G, τ_i = a_i×G
 //   axis:  δu = δφ×u, ∂U/∂m = (I − n nᵀ) ∂U/∂n / |m|  ⇒ τ_{i,j} = −u_{i,j} × ∂U/∂m
 //   rot.:  D = R_j R0⁻¹ R_iᵀ; exp(δφ_j) D ⇒ δθ = J_l⁻¹(θ) δφ_j; D exp(−δφ_i) ⇒ δθ = −J_l⁻ᵀ(θ) δφ_i
-//          ⇒ τ_j = −J_l⁻ᵀ ∂U/∂θ, τ_i = +J_l⁻¹ ∂U/∂θ
+//          ⇒ τ_j = −J_l⁻ᵀ ∂U/∂θ, τ_i = +J_l⁻¹ ∂U/∂θ, with J_l⁻¹ y = y − ½ θ×y + c θ×(θ×y) and
+//          J_l⁻ᵀ y = y + ½ θ×y + c θ×(θ×y) (K is skew, K² symmetric): no matrix is formed.
 BondResult bond_eval(const Bond& b, const Vec3& xi, const Quat& qi, const Vec3& xj,
                      const Quat& qj) {
   const Kinematics k = kinematics(b, xi, qi, xj, qj);
   const BondStiffness& s = b.k;
   const Vec3& n = k.n;
   const Vec3& g = k.g;
-  const Vec3& th = k.theta;
+  const Vec3& th = k.rot.theta;
 
   const double gn = g.dot(n);
   const Vec3 gs = g - gn * n;
@@ -137,24 +185,27 @@ BondResult bond_eval(const Bond& b, const Vec3& xi, const Quat& qi, const Vec3& 
   r.e_bending = 0.5 * s.kn_inertia * tb.squaredNorm();
   r.e_torsion = 0.5 * s.ks_polar * tn * tn;
 
-  const Vec3 dU_dg = s.ks_area * g + (s.kn_area - s.ks_area) * gn * n;
-  const Vec3 dU_dth = s.kn_inertia * th + (s.ks_polar - s.kn_inertia) * tn * n;
-  const Vec3 dU_dn = (s.kn_area - s.ks_area) * gn * g + (s.ks_polar - s.kn_inertia) * tn * th;
+  const double kg = (s.kn_area - s.ks_area) * gn;
+  const double kt = (s.ks_polar - s.kn_inertia) * tn;
+  const Vec3 dU_dg = s.ks_area * g + kg * n;
+  const Vec3 dU_dth = s.kn_inertia * th + kt * n;
+  const Vec3 dU_dn = kg * g + kt * th;
 
   r.fi = dU_dg;
   r.fj = -dU_dg;
   r.ti = k.ai.cross(dU_dg);
   r.tj = -k.aj.cross(dU_dg);
 
-  if (k.m_norm > 1e-12) {
-    const Vec3 dU_dm = (dU_dn - n.dot(dU_dn) * n) / k.m_norm;
+  if (k.inv_m > 0) {
+    const Vec3 dU_dm = k.inv_m * (dU_dn - n.dot(dU_dn) * n);
     r.ti -= k.ui.cross(dU_dm);
     r.tj -= k.uj.cross(dU_dm);
   }
 
-  const Mat3 jinv = so3_left_jacobian_inverse(th);
-  r.ti += jinv * dU_dth;
-  r.tj -= jinv.transpose() * dU_dth;
+  const Vec3 p = th.cross(dU_dth);
+  const Vec3 sym = dU_dth + k.rot.c * th.cross(p);
+  r.ti += sym - 0.5 * p;
+  r.tj -= sym + 0.5 * p;
   return r;
 }
 
