@@ -194,6 +194,11 @@ int execute(const SpecKind& kind, const Parsed& p, std::ostream& term_out, std::
       }
       // Piped, the table's rows say where the run is: plain progress lines only before it starts
       // (a scene-building stage).
+      // The run's last row before the bar's last draw (the end's frame came just before).
+      if (pr.step == pr.total_steps && !p.json) {
+        progress.clear();
+        thermo.finish(out);
+      }
       if (tty || !thermo.started()) progress(pr);
       timing.leave(LoopTiming::kTerminal);
     };
