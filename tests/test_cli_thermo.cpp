@@ -9,13 +9,16 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
+#include <thread>
 
 #include "../client/src/console.h"
+#include "../client/src/loop_timing.h"
 #include "../client/src/results_store.h"
 #include "mdem/cli.h"
 #include "support.h"
@@ -349,6 +352,65 @@ TEST(CliThermo, OnASixtyColumnTerminalNothingWrapsAndTheLogHasNoRedraws) {
   const std::string log = slurp(fs::path(d.file("logs")) / (id + ".log"));
   EXPECT_FALSE(contains(log, "\r"));
   EXPECT_EQ(log, clean);
+}
+
+// The sections get the time between the callbacks as the run loop's order implies, checked with
+// known sleeps: the engine's steps before a chunk's first callback, the capture between a frame
+// and its snapshot, the callbacks' own work where they say, the rest as other.
+TEST(CliThermo, LoopTimingChargesEachSpanToItsSection) {
+  using mdem::cli::LoopTiming;
+  using Event = LoopTiming::Event;
+  auto nap = [](int ms) { std::this_thread::sleep_for(std::chrono::milliseconds(ms)); };
+  LoopTiming t;
+  t.begin();
+  nap(40);  // initialize + step 0's observe
+  t.enter(Event::Frame);
+  nap(20);  // storing the frame
+  t.split(LoopTiming::kStore);
+  nap(10);  // its thermo row
+  t.leave(LoopTiming::kTerminal);
+  nap(30);  // capturing the snapshot
+  t.enter(Event::Snapshot);
+  t.leave(LoopTiming::kStore);
+  t.enter(Event::Poll);
+  t.leave(LoopTiming::kOther);
+  nap(50);  // a chunk of steps
+  t.enter(Event::Progress);
+  t.leave(LoopTiming::kTerminal);
+  nap(10);  // a stage change
+  t.end();
+  // A sleep lasts at least what it asks, and a busy machine may add a few ms to each.
+  auto within = [](double s, double ms) { return s >= 0.001 * ms - 1e-4 && s < 0.001 * ms + 0.03; };
+  EXPECT_TRUE(within(t.seconds(LoopTiming::kSteps), 90)) << t.seconds(LoopTiming::kSteps);
+  EXPECT_TRUE(within(t.seconds(LoopTiming::kStore), 20)) << t.seconds(LoopTiming::kStore);
+  EXPECT_TRUE(within(t.seconds(LoopTiming::kTerminal), 10)) << t.seconds(LoopTiming::kTerminal);
+  EXPECT_TRUE(within(t.seconds(LoopTiming::kSnapshot), 30)) << t.seconds(LoopTiming::kSnapshot);
+  EXPECT_TRUE(within(t.seconds(LoopTiming::kOther), 10)) << t.seconds(LoopTiming::kOther);
+
+  // With the engine's own split (once System fills StepTimers), its row is split into the four
+  // parts and the observables (the rest of it); the percentages still add up.
+  mdem::StepTimers engine;
+  engine.pair_s = 0.040;
+  engine.neighbor_s = 0.010;
+  engine.integrate_s = 0.020;
+  engine.updaters_s = 0.005;
+  std::ostringstream os;
+  mdem::cli::print_loop_timing(os, t, {10, 42, 1, 1.0, 4200.0}, &engine);
+  double sum = 0;
+  int rows = 0;
+  bool in = false;
+  for (const std::string& l : lines_of(os.str())) {
+    if (l.rfind("Section", 0) == 0) {
+      in = true;
+      continue;
+    }
+    if (!in || l.empty()) continue;
+    sum += std::stod(tokens(l).back());
+    ++rows;
+  }
+  EXPECT_EQ(rows, 9) << os.str();
+  EXPECT_NEAR(sum, 100, 1) << os.str();
+  EXPECT_TRUE(contains(os.str(), "Pair forces") && contains(os.str(), "Neighbour search"));
 }
 
 }  // namespace
