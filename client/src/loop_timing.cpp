@@ -41,21 +41,6 @@ void LoopTiming::end() { charge(kOther); }
 
 double LoopTiming::total() const { return std::accumulate(s_.begin(), s_.end(), 0.0); }
 
-const char* LoopTiming::name(Section s) {
-  switch (s) {
-    case kSteps:
-      return "Engine steps";
-    case kSnapshot:
-      return "Snapshot capture";
-    case kStore:
-      return "Results DB";
-    case kTerminal:
-      return "Terminal";
-    default:
-      return "Other";
-  }
-}
-
 const char* LoopTiming::key(Section s) {
   static constexpr const char* k[kSections] = {"steps_s", "snapshot_capture_s", "results_db_s",
                                                "terminal_s", "other_s"};

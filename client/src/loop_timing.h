@@ -43,7 +43,6 @@ class LoopTiming {
 
   double seconds(Section s) const { return s_[s]; }
   double total() const;
-  static const char* name(Section s);
   // The section's key in a report's JSON "timing" object ("steps_s", ...).
   static const char* key(Section s);
 
