@@ -242,6 +242,29 @@ void BM_SparseFilmVdw(benchmark::State& state) { issue13_vdw(state, false); }
 BENCHMARK(BM_DenseFilmVdw)->Apply(one_and_two_threads);
 BENCHMARK(BM_SparseFilmVdw)->Apply(one_and_two_threads);
 
+// The parallel bond alone on the relaxed sparse film (its 396 × 147 bonds deformed by the
+// relaxation): one force evaluation into a thread sink; ns_per_bond per bond evaluated.
+void BM_SparseFilmBonds(benchmark::State& state) {
+  const Elements& el = relaxed_issue13_film(false);
+  const int threads = static_cast<int>(state.range(0));
+  const auto bonds = make_film(issue13_film(false)).bonds;
+  ForceSink sink;
+  sink.resize(el.size(), threads, false);
+  bonds->compute(el, nullptr, sink);  // warm-up
+  for (auto _ : state) {
+    state.PauseTiming();
+    sink.clear();
+    state.ResumeTiming();
+    bonds->compute(el, nullptr, sink);
+  }
+  const double nb = static_cast<double>(bonds->bonds().size());
+  state.counters["ns_per_bond"] =
+      benchmark::Counter(nb * static_cast<double>(state.iterations()) * 1e-9,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["bonds"] = nb;
+}
+BENCHMARK(BM_SparseFilmBonds)->Apply(one_and_two_threads);
+
 // The twist job's fixed scene: the thesis's 91-tube rope (N = 6, 50 segments, 4550 elements) with
 // bonds, vdW and its dashpots, under the rigid-grip torque ramp at local damping 0.1 — the
 // inner loop of the Table 4-1 runs, without the per-frame observables.

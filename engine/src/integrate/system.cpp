@@ -106,26 +106,57 @@ inline void kick_anisotropic(const Quat& q, const Vec3& I, Vec3& w, const Vec3& 
   w = world_inertia_inverse_times(q, I, L);
 }
 
-// Adds body(i, a, b)'s contributions to a and b over i in [0, n), threaded, in a fixed order:
+// PFC local damping on the unbalanced force of every free DOF of element i: F_k -= α|F_k|
+// sign(v_k), added to the model dampers' forces in fd, td (or to zero without them).
+inline void local_damping(Elements& E, std::size_t i, double a, bool model_damping, Vec3& fd,
+                          Vec3& td) {
+  if (!model_damping) {
+    fd.setZero();
+    td.setZero();
+  }
+  const auto& dof = E.dof[i];
+  for (int k = 0; k < 3; ++k) {
+    if (is_free(dof[k])) {
+      const double F = E.f[i][k] + E.f_ext[i][k] + fd[k];
+      const double vk = E.v[i][k];
+      fd[k] -= a * std::abs(F) * (vk > 0 ? 1.0 : vk < 0 ? -1.0 : 0.0);
+    }
+    if (is_free(dof[k + 3])) {
+      const double M = E.t[i][k] + E.t_ext[i][k] + td[k];
+      const double wk = E.w[i][k];
+      td[k] -= a * std::abs(M) * (wk > 0 ? 1.0 : wk < 0 ? -1.0 : 0.0);
+    }
+  }
+}
+
+// Kinetic energies of element i (translational, rotational).
+inline double kinetic_translational(const Elements& E, std::size_t i) {
+  return 0.5 * E.mass[i] * E.v[i].squaredNorm();
+}
+inline double kinetic_rotational(const Elements& E, std::size_t i) {
+  return 0.5 * E.w[i].dot(world_inertia_times(E.q[i], E.inertia[i], E.w[i]));
+}
+
+// Adds body(i, sums)'s contributions to sums[0..N) over i in [0, n), threaded, in a fixed order:
 // each thread sums its static block into its own slot and the slots are added in thread order.
 // OpenMP's reduction(+) adds the threads' sums in the order they finish, which changes the last
 // bits from run to run, so a run (and a run resumed from a checkpoint) would not repeat exactly.
-template <class Body>
-void ordered_sums(long n, std::vector<std::array<double, 2>>& partial, double& a, double& b,
+template <std::size_t N, class Body>
+void ordered_sums(long n, std::vector<std::array<double, 4>>& partial, std::array<double*, N> sums,
                   Body body) {
-  std::fill(partial.begin(), partial.end(), std::array<double, 2>{0.0, 0.0});
+  static_assert(N <= 4);
   const int team = static_cast<int>(partial.size());
 #pragma omp parallel num_threads(team) if (n >= kParallelMinItems)
   {
-    double ta = 0, tb = 0;
+    std::array<double, N> ts{};
 #pragma omp for schedule(static)
-    for (long i = 0; i < n; ++i) body(i, ta, tb);
-    partial[omp_get_thread_num()] = {ta, tb};
+    for (long i = 0; i < n; ++i) body(i, ts);
+    std::copy(ts.begin(), ts.end(), partial[omp_get_thread_num()].begin());
   }
-  for (const auto& p : partial) {
-    a += p[0];
-    b += p[1];
-  }
+  // Threads of a team smaller than the slots (the serial branch) added nothing.
+  const int used = n >= kParallelMinItems ? team : 1;
+  for (int t = 0; t < used; ++t)
+    for (std::size_t k = 0; k < N; ++k) *sums[k] += partial[t][k];
 }
 
 }  // namespace
@@ -217,7 +248,7 @@ void System::initialize() {
 
   const std::size_t n = el_.size();
   sink_.resize(n, threads_, model_damping);
-  partial_sums_.assign(threads_, {0.0, 0.0});
+  partial_sums_.assign(threads_, {0.0, 0.0, 0.0, 0.0});
   fd_.assign(n, Vec3::Zero());
   td_.assign(n, Vec3::Zero());
 
@@ -279,20 +310,18 @@ void System::refresh_booking_work() {
   update_energy_scale();
 }
 
-void System::compute_forces() {
+void System::compute_forces(bool with_local_damping) {
   pairs_.update(el_);
   sink_.clear();
   for (const auto& m : models_)
     if (inactive_.empty() || model_active(m.get())) m->compute(el_, pairs_.list_of(m.get()), sink_);
   ledger_.potential = sink_.reduce(el_.f, el_.t, fd_, td_);
 
-  // PFC local damping on the unbalanced force of every free DOF: F_k -= α|F_k| sign(v_k).
   const double a = settings_.local_damping;
-  const bool model_damping = sink_.has_damping();
   if (a == 0) {
     // fd_, td_ hold the model dampers' forces, or are zero (also after a stage turned local
     // damping off: set_local_damping).
-    if (!model_damping && local_damping_was_on_) {
+    if (!sink_.has_damping() && local_damping_was_on_) {
       std::fill(fd_.begin(), fd_.end(), Vec3::Zero());
       std::fill(td_.begin(), td_.end(), Vec3::Zero());
       local_damping_was_on_ = false;
@@ -300,34 +329,19 @@ void System::compute_forces() {
     return;
   }
   local_damping_was_on_ = true;
+  if (!with_local_damping) return;  // the caller's pass over the elements adds it
   const long n = static_cast<long>(el_.size());
+  const bool model_damping = sink_.has_damping();
 #pragma omp parallel for schedule(static) if (n >= kParallelMinItems)
-  for (long i = 0; i < n; ++i) {
-    if (!model_damping) {
-      fd_[i].setZero();
-      td_[i].setZero();
-    }
-    for (int k = 0; k < 3; ++k) {
-      if (is_free(el_.dof[i][k])) {
-        const double F = el_.f[i][k] + el_.f_ext[i][k] + fd_[i][k];
-        const double vk = el_.v[i][k];
-        fd_[i][k] -= a * std::abs(F) * (vk > 0 ? 1.0 : vk < 0 ? -1.0 : 0.0);
-      }
-      if (is_free(el_.dof[i][k + 3])) {
-        const double M = el_.t[i][k] + el_.t_ext[i][k] + td_[i][k];
-        const double wk = el_.w[i][k];
-        td_[i][k] -= a * std::abs(M) * (wk > 0 ? 1.0 : wk < 0 ? -1.0 : 0.0);
-      }
-    }
-  }
+  for (long i = 0; i < n; ++i) local_damping(el_, i, a, model_damping, fd_[i], td_[i]);
 }
 
 void System::update_kinetic() {
   double kt = 0, kr = 0;
   const long n = static_cast<long>(el_.size());
-  ordered_sums(n, partial_sums_, kt, kr, [this](long i, double& kt_i, double& kr_i) {
-    kt_i += 0.5 * el_.mass[i] * el_.v[i].squaredNorm();
-    kr_i += 0.5 * el_.w[i].dot(world_inertia_times(el_.q[i], el_.inertia[i], el_.w[i]));
+  ordered_sums<2>(n, partial_sums_, {&kt, &kr}, [this](long i, std::array<double, 2>& k) {
+    k[0] += kinetic_translational(el_, i);
+    k[1] += kinetic_rotational(el_, i);
   });
   ledger_.kinetic_translational = kt;
   ledger_.kinetic_rotational = kr;
@@ -380,17 +394,26 @@ void System::run(long nsteps) {
   const long n = static_cast<long>(el_.size());
   auto& E = el_;
 
+  // Two passes over the elements per step (plus the force evaluation's own), each element's
+  // arithmetic in the order of velocity Verlet: (1) first half kick and drift; (2) local damping,
+  // second half kick and kinetic energy. The sums are per thread in a fixed order (ordered_sums).
+  const double a_local = settings_.local_damping;
   for (long step = 0; step < nsteps; ++step) {
     double work = 0, diss = 0;
     // 1. First half kick with the forces at t_n; book half of the work of external loads and
-    //    constraints over the coming drift, and the power of damping at v_n.
-    // (work and diss in the body are the thread's partial sums.)
-    ordered_sums(n, partial_sums_, work, diss, [&](long i, double& work, double& diss) {
+    //    constraints over the coming drift, and the power of damping at v_n. Then the drift:
+    //    positions, and orientations by the exact exponential map (isotropic bodies, where ω is
+    //    constant in free rotation) or the DLM splitting (anisotropic).
+    long runaway = -1;
+    ordered_sums<2>(n, partial_sums_, {&work, &diss}, [&](long i, std::array<double, 2>& wd) {
+      double& work = wd[0];
+      double& diss = wd[1];
       const auto& dof = E.dof[i];
       for (int k = 0; k < 3; ++k)
         first_half_kick(dof[k], E.v[i][k], E.f[i][k], E.f_ext[i][k], fd_[i][k],
                         E.v_prescribed[i][k], E.mass[i], E.inv_mass[i], h, work, diss);
-      if (E.is_isotropic(i)) {
+      const bool isotropic = E.is_isotropic(i);
+      if (isotropic) {
         const double I = E.inertia[i].x(), iI = 1.0 / I;
         for (int k = 0; k < 3; ++k)
           first_half_kick(dof[k + 3], E.w[i][k], E.t[i][k], E.t_ext[i][k], td_[i][k],
@@ -400,16 +423,10 @@ void System::run(long nsteps) {
         kick_anisotropic(E.q[i], E.inertia[i], E.w[i], E.t[i] + E.t_ext[i] + td_[i], h);
         work += E.t_ext[i].dot(E.w[i]) * h;
       }
-    });
 
-    // 2. Drift: positions, and orientations by the exact exponential map (isotropic bodies,
-    //    where ω is constant in free rotation) or the DLM splitting (anisotropic).
-    long runaway = -1;
-#pragma omp parallel for schedule(static) reduction(max : runaway) if (n >= kParallelMinItems)
-    for (long i = 0; i < n; ++i) {
       const Vec3 dx = E.v[i] * dt;
       E.x[i] += dx;
-      if (E.is_isotropic(i)) {
+      if (isotropic) {
         E.q[i] = (quat_exp(E.w[i] * dt) * E.q[i]).normalized();
       } else {
         Vec3 L = world_inertia_times(E.q[i], E.inertia[i], E.w[i]);
@@ -418,9 +435,12 @@ void System::run(long nsteps) {
       }
       // An element moving more than its radius, or turning more than a radian, in one step is
       // not being integrated any more.
-      if (!(dx.norm() <= E.radius[i]) || !(E.w[i].norm() * dt <= 1.0))
+      const double r = E.radius[i];
+      if (!(dx.squaredNorm() <= r * r) || !(E.w[i].squaredNorm() * (dt * dt) <= 1.0)) {
+#pragma omp critical(mdem_system_runaway)
         runaway = std::max(runaway, i);
-    }
+      }
+    });
     if (runaway >= 0) {
       const std::size_t i = static_cast<std::size_t>(runaway);
       std::ostringstream m;
@@ -435,30 +455,40 @@ void System::run(long nsteps) {
     time_ += dt;
     ++steps_;
     for (auto& u : updaters_) u->apply(*this, time_);
-    compute_forces();
+    compute_forces(false);
 
-    // 3. Second half kick with the forces at t_{n+1}; the rest of the work and damping books.
+    // 2. Local damping of the new forces, second half kick with the forces at t_{n+1}, the rest
+    //    of the work and damping books, and the kinetic energy at t_{n+1}.
+    const bool local = a_local > 0;
+    const bool model_damping = sink_.has_damping();
     long bad = -1;
-    ordered_sums(n, partial_sums_, work, diss, [&](long i, double& work, double& diss) {
-      const auto& dof = E.dof[i];
-      for (int k = 0; k < 3; ++k)
-        second_half_kick(dof[k], E.v[i][k], E.f[i][k], E.f_ext[i][k], fd_[i][k],
-                         E.v_prescribed[i][k], E.mass[i], E.inv_mass[i], h, work, diss);
-      if (E.is_isotropic(i)) {
-        const double I = E.inertia[i].x(), iI = 1.0 / I;
-        for (int k = 0; k < 3; ++k)
-          second_half_kick(dof[k + 3], E.w[i][k], E.t[i][k], E.t_ext[i][k], td_[i][k],
-                           E.w_prescribed[i][k], I, iI, h, work, diss);
-      } else {
-        work += E.t_ext[i].dot(E.w[i]) * h;
-        kick_anisotropic(E.q[i], E.inertia[i], E.w[i], E.t[i] + E.t_ext[i] + td_[i], h);
-        diss -= td_[i].dot(E.w[i]) * h;
-      }
-      if (!E.v[i].allFinite() || !E.w[i].allFinite()) {
+    double kt = 0, kr = 0;
+    ordered_sums<4>(
+        n, partial_sums_, {&work, &diss, &kt, &kr}, [&](long i, std::array<double, 4>& sums) {
+          double& work = sums[0];
+          double& diss = sums[1];
+          if (local) local_damping(E, i, a_local, model_damping, fd_[i], td_[i]);
+          const auto& dof = E.dof[i];
+          for (int k = 0; k < 3; ++k)
+            second_half_kick(dof[k], E.v[i][k], E.f[i][k], E.f_ext[i][k], fd_[i][k],
+                             E.v_prescribed[i][k], E.mass[i], E.inv_mass[i], h, work, diss);
+          if (E.is_isotropic(i)) {
+            const double I = E.inertia[i].x(), iI = 1.0 / I;
+            for (int k = 0; k < 3; ++k)
+              second_half_kick(dof[k + 3], E.w[i][k], E.t[i][k], E.t_ext[i][k], td_[i][k],
+                               E.w_prescribed[i][k], I, iI, h, work, diss);
+          } else {
+            work += E.t_ext[i].dot(E.w[i]) * h;
+            kick_anisotropic(E.q[i], E.inertia[i], E.w[i], E.t[i] + E.t_ext[i] + td_[i], h);
+            diss -= td_[i].dot(E.w[i]) * h;
+          }
+          if (!E.v[i].allFinite() || !E.w[i].allFinite()) {
 #pragma omp critical(mdem_system_bad_velocity)
-        bad = std::max(bad, i);
-      }
-    });
+            bad = std::max(bad, i);
+          }
+          sums[2] += kinetic_translational(E, i);
+          sums[3] += kinetic_rotational(E, i);
+        });
     if (bad >= 0) check_finite_forces();  // names the element and the cause
     if (bad >= 0)
       throw NumericalError("non-finite velocity of " + describe(E, static_cast<std::size_t>(bad)) +
@@ -470,7 +500,8 @@ void System::run(long nsteps) {
     // (plastic flow, bonds breaking). Only evaluations inside run() count: initialize() resets
     // the books, and refresh() follows edits the ledger cannot account for.
     ledger_.dissipated += diss + ledger_.potential.released;
-    update_kinetic();
+    ledger_.kinetic_translational = kt;
+    ledger_.kinetic_rotational = kr;
     if (steps_ % settings_.guard_every == 0) check_energy_growth();
   }
 }

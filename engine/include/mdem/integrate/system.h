@@ -180,7 +180,9 @@ class System {
   double compute_critical_dt() const;
 
  private:
-  void compute_forces();
+  // Forces, energies and damping of the current state; with_local_damping false leaves the
+  // local damping to the caller's own pass over the elements (run()'s second half kick).
+  void compute_forces(bool with_local_damping = true);
   void update_kinetic();
   void check_finite_forces() const;
   void check_energy_growth();
@@ -197,7 +199,7 @@ class System {
   ForceSink sink_;
   std::vector<Vec3> fd_, td_;  // damping force / torque (model dampers + local damping)
   std::vector<Vec3> f_prev_, t_prev_, fext_prev_, text_prev_;  // for work bookkeeping
-  std::vector<std::array<double, 2>> partial_sums_;  // per thread, for sums in a fixed order
+  std::vector<std::array<double, 4>> partial_sums_;  // per thread, for sums in a fixed order
   EnergyLedger ledger_;
   double energy_scale_ = 0;  // energy in play, for relative errors
   double initial_kinetic_ = 0, initial_stored_ = 0;
