@@ -102,16 +102,7 @@ TEST(CntBundle, VibratingSpinningBundleConservesEnergyWithoutDrift) {
   }
   ke_scale /= static_cast<double>(t.size());
   // Least-squares slope.
-  const double n = static_cast<double>(t.size());
-  double st = 0, se = 0, stt = 0, ste = 0;
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    st += t[k];
-    se += e[k];
-    stt += t[k] * t[k];
-    ste += t[k] * e[k];
-  }
-  const double slope = (n * ste - st * se) / (n * stt - st * st);
-  const double drift = std::abs(slope) * (t.back() - t.front());
+  const double drift = std::abs(linear_trend(t, e));
   EXPECT_LT(drift, 1e-3 * ke_scale) << "drift " << drift << " eV, kinetic scale " << ke_scale;
   std::printf(
       "energy trend over %ld steps: %.3g eV; kinetic scale %.4g eV; ratio %.2e; dt %.2f fs\n",

@@ -405,42 +405,44 @@ void System::run(long nsteps) {
     //    positions, and orientations by the exact exponential map (isotropic bodies, where ω is
     //    constant in free rotation) or the DLM splitting (anisotropic).
     long runaway = -1;
-    ordered_sums<2>(n, partial_sums_, {&work, &diss}, [&](long i, std::array<double, 2>& wd) {
-      double& work = wd[0];
-      double& diss = wd[1];
-      const auto& dof = E.dof[i];
-      for (int k = 0; k < 3; ++k)
-        first_half_kick(dof[k], E.v[i][k], E.f[i][k], E.f_ext[i][k], fd_[i][k],
-                        E.v_prescribed[i][k], E.mass[i], E.inv_mass[i], h, work, diss);
-      const bool isotropic = E.is_isotropic(i);
-      if (isotropic) {
-        const double I = E.inertia[i].x(), iI = 1.0 / I;
-        for (int k = 0; k < 3; ++k)
-          first_half_kick(dof[k + 3], E.w[i][k], E.t[i][k], E.t_ext[i][k], td_[i][k],
-                          E.w_prescribed[i][k], I, iI, h, work, diss);
-      } else {  // anisotropic: all rotational DOFs free (checked in initialize)
-        diss -= td_[i].dot(E.w[i]) * h;
-        kick_anisotropic(E.q[i], E.inertia[i], E.w[i], E.t[i] + E.t_ext[i] + td_[i], h);
-        work += E.t_ext[i].dot(E.w[i]) * h;
-      }
+    ordered_sums<2>(
+        n, partial_sums_,
+        {&work, &diss}, [&](long i, std::array<double, 2>& wd) __attribute__((always_inline)) {
+          double& work = wd[0];
+          double& diss = wd[1];
+          const auto& dof = E.dof[i];
+          for (int k = 0; k < 3; ++k)
+            first_half_kick(dof[k], E.v[i][k], E.f[i][k], E.f_ext[i][k], fd_[i][k],
+                            E.v_prescribed[i][k], E.mass[i], E.inv_mass[i], h, work, diss);
+          const bool isotropic = E.is_isotropic(i);
+          if (isotropic) {
+            const double I = E.inertia[i].x(), iI = 1.0 / I;
+            for (int k = 0; k < 3; ++k)
+              first_half_kick(dof[k + 3], E.w[i][k], E.t[i][k], E.t_ext[i][k], td_[i][k],
+                              E.w_prescribed[i][k], I, iI, h, work, diss);
+          } else {  // anisotropic: all rotational DOFs free (checked in initialize)
+            diss -= td_[i].dot(E.w[i]) * h;
+            kick_anisotropic(E.q[i], E.inertia[i], E.w[i], E.t[i] + E.t_ext[i] + td_[i], h);
+            work += E.t_ext[i].dot(E.w[i]) * h;
+          }
 
-      const Vec3 dx = E.v[i] * dt;
-      E.x[i] += dx;
-      if (isotropic) {
-        E.q[i] = (quat_exp(E.w[i] * dt) * E.q[i]).normalized();
-      } else {
-        Vec3 L = world_inertia_times(E.q[i], E.inertia[i], E.w[i]);
-        free_rotor(E.q[i], L, E.inertia[i], dt);
-        E.w[i] = world_inertia_inverse_times(E.q[i], E.inertia[i], L);
-      }
-      // An element moving more than its radius, or turning more than a radian, in one step is
-      // not being integrated any more.
-      const double r = E.radius[i];
-      if (!(dx.squaredNorm() <= r * r) || !(E.w[i].squaredNorm() * (dt * dt) <= 1.0)) {
+          const Vec3 dx = E.v[i] * dt;
+          E.x[i] += dx;
+          if (isotropic) {
+            E.q[i] = (quat_exp(E.w[i] * dt) * E.q[i]).normalized();
+          } else {
+            Vec3 L = world_inertia_times(E.q[i], E.inertia[i], E.w[i]);
+            free_rotor(E.q[i], L, E.inertia[i], dt);
+            E.w[i] = world_inertia_inverse_times(E.q[i], E.inertia[i], L);
+          }
+          // An element moving more than its radius, or turning more than a radian, in one step is
+          // not being integrated any more.
+          const double r = E.radius[i];
+          if (!(dx.squaredNorm() <= r * r) || !(E.w[i].squaredNorm() * (dt * dt) <= 1.0)) {
 #pragma omp critical(mdem_system_runaway)
-        runaway = std::max(runaway, i);
-      }
-    });
+            runaway = std::max(runaway, i);
+          }
+        });
     if (runaway >= 0) {
       const std::size_t i = static_cast<std::size_t>(runaway);
       std::ostringstream m;
@@ -464,7 +466,8 @@ void System::run(long nsteps) {
     long bad = -1;
     double kt = 0, kr = 0;
     ordered_sums<4>(
-        n, partial_sums_, {&work, &diss, &kt, &kr}, [&](long i, std::array<double, 4>& sums) {
+        n, partial_sums_, {&work, &diss, &kt, &kr},
+        [&](long i, std::array<double, 4>& sums) __attribute__((always_inline)) {
           double& work = sums[0];
           double& diss = sums[1];
           if (local) local_damping(E, i, a_local, model_damping, fd_[i], td_[i]);
