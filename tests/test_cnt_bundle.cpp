@@ -102,7 +102,7 @@ TEST(CntBundle, VibratingSpinningBundleConservesEnergyWithoutDrift) {
   }
   ke_scale /= static_cast<double>(t.size());
   // Least-squares slope.
-  const double drift = std::abs(linear_trend(t, e));
+  const double drift = std::abs(mdem::testing::linear_trend(t, e));
   EXPECT_LT(drift, 1e-3 * ke_scale) << "drift " << drift << " eV, kinetic scale " << ke_scale;
   std::printf(
       "energy trend over %ld steps: %.3g eV; kinetic scale %.4g eV; ratio %.2e; dt %.2f fs\n",
