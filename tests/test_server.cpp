@@ -278,14 +278,14 @@ TEST(Server, StalledWatcherSlowsNothingAndMemoryStaysBounded) {
 // report equal those of an uninterrupted run, bit for bit.
 TEST(Server, KillDashNineResumesToIdenticalResults) {
   DaemonProcess d(fresh_dir("kill9"), {"--checkpoint-every", "0.2"});
-  const JobSpec spec = small_spec(150, 10, 0.5);
+  const JobSpec spec = small_spec(600, 10, 0.5);
   const std::string ref = submit_ok(d, kAliceToken, "reference", spec);
   wait_finished(d, ref, 300);
   const auto ref_ev = watch(d, kAliceToken, ref, 1);
 
   const std::string id = submit_ok(d, kAliceToken, "victim", spec);
   const JobInfo before = wait_for(d, id, [](const JobInfo& j) { return j.step() > 3000; });
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // a checkpoint exists
+  wait_for_checkpoint(d, id);
   d.kill9();
   d.start();
   const JobInfo after = wait_finished(d, id, 300);
@@ -333,7 +333,7 @@ TEST(Server, SigtermRequeuesRunningJobsFromTheirCheckpoint) {
 
 TEST(Server, CorruptCheckpointFailsThatJobOnly) {
   DaemonProcess d(fresh_dir("corrupt"), {"--checkpoint-every", "0.2"});
-  const std::string id = submit_ok(d, kAliceToken, "victim", small_spec(200));
+  const std::string id = submit_ok(d, kAliceToken, "victim", small_spec(800));
   const std::string other = submit_ok(d, kBobToken, "other", small_spec(10));
   const fs::path ckpt = kill_after_checkpoint(d, id);
   ASSERT_TRUE(fs::exists(ckpt));
