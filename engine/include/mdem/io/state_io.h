@@ -133,7 +133,7 @@ class StateReader {
 // 2: staged jobs (the stage index, finished stages' results, then the current stage's state).
 // 3: element tags (checked against the job's, like the other element properties).
 // 4: the energy ledger's nanoparticle term split into NP–CNT and NP–NP (one more stored term).
-// 5: the elements' topology (bonds, tube chains and rings) and groups, loaded in place of the job's.
+// 5: the elements' topology (bonds, tube chains, rings) and groups, loaded in place of the job's.
 inline constexpr std::uint32_t kCheckpointVersion = 5;
 
 // A part of a job that a run changes and a checkpoint must carry (a protocol, an observer, a

@@ -91,8 +91,8 @@ struct VdwConstants {
 VdwPairResult vdw_pair(const VdwConstants& k, const Vec3& x1, const Vec3& b1, const Vec3& x2,
                        const Vec3& b2);
 
-// The pair's D = R/(r δ(θ)) − 2 as vdw_pair computes it (θ with the flip or its blend), r = x2 − x1;
-// −2 for coincident centres. For overlap tests (the tensile pre-relaxation, tensile.md §3.3).
+// The pair's D = R/(r δ(θ)) − 2 as vdw_pair computes it (θ with the flip or its blend), for
+// r = x2 − x1; −2 for coincident centres. For overlap tests (tensile pre-relaxation, §3.3).
 double vdw_separation(const VdwConstants& k, const Vec3& r, const Vec3& b1, const Vec3& b2);
 
 // How VdwKernel evaluates its pairs. Batched (the default): in batches of pairs in
