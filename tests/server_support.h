@@ -84,21 +84,24 @@ inline std::map<long, std::vector<double>> frames_by_step(const std::vector<JobE
   return m;
 }
 
-// Waits (up to 30 s) until job `id` has written its checkpoint file, polling every 10 ms: a fixed
-// sleep after some step would race a job that finishes sooner on a faster engine.
-inline fs::path wait_for_checkpoint(DaemonProcess& d, const std::string& id) {
-  const fs::path ckpt = d.data_dir() / "checkpoints" / (id + ".ckpt");
-  for (int k = 0; k < 3000 && !fs::exists(ckpt); ++k)
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  return ckpt;
+inline fs::path checkpoint_path(const DaemonProcess& d, const std::string& id) {
+  return d.data_dir() / "checkpoints" / (id + ".ckpt");
+}
+
+// Waits until job `id` has written its checkpoint file (a fixed sleep after some step would race
+// a job that finishes sooner on a faster engine); the job's state then.
+inline JobInfo wait_for_checkpoint(const DaemonProcess& d, const std::string& id) {
+  const fs::path ckpt = checkpoint_path(d, id);
+  return wait_for(d, id, [&](const JobInfo&) { return fs::exists(ckpt); });
 }
 
 // Lets job `id` (checkpointing every 0.2 s) run past step 2000 and checkpoint, then kill -9s the
 // daemon; the job's checkpoint file (left in place).
 inline fs::path kill_after_checkpoint(DaemonProcess& d, const std::string& id) {
   wait_for(d, id, [](const JobInfo& j) { return j.step() > 2000; });
-  const fs::path ckpt = wait_for_checkpoint(d, id);
+  wait_for_checkpoint(d, id);
   d.kill9();
+  const fs::path ckpt = checkpoint_path(d, id);
   EXPECT_TRUE(fs::exists(ckpt)) << ckpt;
   return ckpt;
 }
