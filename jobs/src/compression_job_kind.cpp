@@ -61,6 +61,7 @@ JobKind compression_job_kind() {
     return static_cast<long>(std::ceil(1.01 * n + 10)) + 2;
   };
   k.builds_quickly = false;  // packing the grains is a simulation of its own
+  // Results (the last flag): peak force, loading stiffness, residual flattening, bonds broken.
   k.summary = {
       {"grains", SummaryField::Type::Count, "", "grains", 1, 6, true},
       {"bonds", SummaryField::Type::Count, "", "bonds", 1, 6, false},
@@ -70,17 +71,17 @@ JobKind compression_job_kind() {
       {"packing_steps", SummaryField::Type::Count, "", "packing steps", 2, 6, false},
       {"packing_unbalanced_ratio", SummaryField::Type::Real, "", "unbalanced ratio", 2, 6, false},
       {"packing_wall_shift_nm", SummaryField::Type::Real, "nm", "wall shift", 2, 6, false},
-      {"peak_force_nN", SummaryField::Type::Real, "nN", "peak force", 3, 6, true},
+      {"peak_force_nN", SummaryField::Type::Real, "nN", "peak force", 3, 6, true, true},
       {"peak_force_displacement_nm", SummaryField::Type::Real, "nm", "at h", 3, 6, false},
       {"loading_stiffness_nN_per_nm", SummaryField::Type::Real, "nN/nm", "loading stiffness", 3, 6,
-       false},
+       false, true},
       {"final_force_nN", SummaryField::Type::Real, "nN", "final force", 4, 6, false},
       {"final_displacement_nm", SummaryField::Type::Real, "nm", "at h", 4, 6, false},
       {"residual_height_loss_nm", SummaryField::Type::Real, "nm", "residual height loss", 4, 6,
-       false},
+       false, true},
       {"bonds_intact", SummaryField::Type::Count, "", "bonds intact", 5, 6, false},
       {"bonds_yielded", SummaryField::Type::Count, "", "yielded", 5, 6, false},
-      {"bonds_broken", SummaryField::Type::Count, "", "broken", 5, 6, false},
+      {"bonds_broken", SummaryField::Type::Count, "", "broken", 5, 6, false, true},
       {"fragments", SummaryField::Type::Count, "", "fragments", 5, 6, false},
       {"slip_max_nm", SummaryField::Type::Real, "nm", "grain slip max", 6, 6, false},
       {"slip_mean_nm", SummaryField::Type::Real, "nm", "mean", 6, 6, false},

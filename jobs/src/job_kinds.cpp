@@ -77,4 +77,11 @@ std::vector<std::string> summary_highlights(const SummaryLayout& layout,
   return out;
 }
 
+std::vector<SummaryField> summary_results(const SummaryLayout& layout) {
+  std::vector<SummaryField> out;
+  for (const SummaryField& f : layout)
+    if (f.result) out.push_back(f);
+  return out;
+}
+
 }  // namespace mdem

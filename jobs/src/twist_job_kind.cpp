@@ -50,15 +50,17 @@ JobKind twist_job_kind() {
            spec::twist_segments(spec.twist());
   };
   k.builds_quickly = true;  // a lattice
+  // Results (the last flag): the end state a user reads - twist angle, end shift, radius, Q.
   k.summary = {
       {"morphology", SummaryField::Type::Label, "", "morphology", 1, 6, true},
-      {"twist_angle_deg", SummaryField::Type::Real, "deg", "twist angle", 1, 6, false},
-      {"shift_angle_deg", SummaryField::Type::Real, "deg", "end shift", 1, 6, false},
-      {"topological_charge", SummaryField::Type::Count, "", "topological charge Q", 2, 6, false},
+      {"twist_angle_deg", SummaryField::Type::Real, "deg", "twist angle", 1, 6, false, true},
+      {"shift_angle_deg", SummaryField::Type::Real, "deg", "end shift", 1, 6, false, true},
+      {"topological_charge", SummaryField::Type::Count, "", "topological charge Q", 2, 6, false,
+       true},
       {"max_topological_charge", SummaryField::Type::Count, "", "max Q", 2, 6, false},
       {"peak_twist_angle_deg", SummaryField::Type::Real, "deg", "peak twist angle", 2, 6, false},
       {"peak_shift_angle_deg", SummaryField::Type::Real, "deg", "peak end shift", 2, 6, false},
-      {"rope_radius_nm", SummaryField::Type::Real, "nm", "rope radius", 3, 6, false},
+      {"rope_radius_nm", SummaryField::Type::Real, "nm", "rope radius", 3, 6, false, true},
       {"initial_rope_radius_nm", SummaryField::Type::Real, "nm", "initial radius", 3, 6, false},
       {"length_nm", SummaryField::Type::Real, "nm", "length", 3, 6, false},
       {"core_void_nm", SummaryField::Type::Real, "nm", "core void", 3, 6, false},

@@ -27,6 +27,9 @@ struct SummaryField {
   int line = 0;            // the printer's line it goes on (1, 2, ...)
   int digits = 6;          // significant digits when printed (reals)
   bool highlight = false;  // shown in `mdem ls`
+  // One of the kind's results: what a user reads off the job (a twist angle, a peak force), whose
+  // error a study (`mdem study`) measures against its reference. Reals and counts only.
+  bool result = false;
 };
 using SummaryLayout = std::vector<SummaryField>;
 
@@ -69,5 +72,7 @@ std::vector<std::string> summary_lines(const SummaryLayout& layout,
 // The highlights of `mdem ls`: "morphology twisted", "1638 elements", "peak force 702.8 nN".
 std::vector<std::string> summary_highlights(const SummaryLayout& layout,
                                             const nlohmann::ordered_json& summary);
+// The layout's results (SummaryField::result), in layout order.
+std::vector<SummaryField> summary_results(const SummaryLayout& layout);
 
 }  // namespace mdem
