@@ -29,6 +29,8 @@ void print_usage(std::ostream& os) {
         "                 (--server: the daemon's view)\n"
         "  export ID      write a job's results as extended XYZ (OVITO), VTK (ParaView) or CSV\n"
         "  plot ID        draw a job's time series to a .png or .svg with gnuplot\n"
+        "  study <kind>   run one job spec over several values of its settings (--vary) and\n"
+        "                 measure each result's error against wall time\n"
         "  probe          evaluate one contact model for two elements and print JSON\n"
         "  help [cmd]     show this help, or the help of one command\n"
         "\n"
@@ -61,6 +63,7 @@ int dispatch(const std::vector<std::string>& argv_tail, std::ostream& out, std::
   const std::vector<std::string> rest(argv_tail.begin() + 1, argv_tail.end());
   if (cmd == "probe") return probe(rest, out, err);
   if (cmd == "run") return run(rest, out, err);
+  if (cmd == "study") return study(rest, out, err);
   if (cmd == "submit") return submit(rest, out, err);
   if (cmd == "watch") return watch(rest, out, err);
   if (cmd == "cancel") return cancel(rest, out, err);
@@ -79,6 +82,7 @@ int dispatch(const std::vector<std::string>& argv_tail, std::ostream& out, std::
     }
     if (rest.front() == "probe") return probe({"--help"}, out, err);
     if (rest.front() == "run") return run({"--help"}, out, err);
+    if (rest.front() == "study") return study({"--help"}, out, err);
     if (rest.front() == "submit") return submit({"--help"}, out, err);
     if (rest.front() == "watch") return watch({"--help"}, out, err);
     if (rest.front() == "cancel") return cancel({"--help"}, out, err);

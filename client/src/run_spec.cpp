@@ -47,14 +47,7 @@ void print_help(const SpecKind& kind, std::ostream& os) {
         "value). A job whose process was killed outright (kill -9) is listed as INTERRUPTED.\n";
 }
 
-struct Parsed {
-  v1::JobSpec spec;
-  std::string db;
-  bool json = false;
-  std::optional<double> thermo_every_ps;  // default: default_thermo_every
-  std::optional<std::string> log;         // default: default_log_path
-  bool no_log = false;
-};
+using Parsed = SpecRunOptions;
 
 Parsed parse_args(const SpecKind& kind, const std::vector<std::string>& args) {
   FlagSpec fs = spec_flag_spec(kind);
@@ -127,8 +120,12 @@ class ThermoPrinter {
   std::optional<SeriesFrame> last_;
 };
 
-int execute(const SpecKind& kind, const Parsed& p, std::ostream& term_out, std::ostream& term_err) {
+}  // namespace
+
+int run_spec_job(const SpecKind& kind, const SpecRunOptions& p, std::ostream& term_out,
+                 std::ostream& term_err, std::string* job_id) {
   const std::string id = ResultsStore::new_job_id();
+  if (job_id) *job_id = id;
   // A log path given opens first: one that cannot be written stops the run before anything
   // exists. The default one (beside the database) opens once the database did, so that the
   // database's own errors come first; what was shown before is held for it.
@@ -253,8 +250,6 @@ int execute(const SpecKind& kind, const Parsed& p, std::ostream& term_out, std::
   }
 }
 
-}  // namespace
-
 int run_spec_kind(const SpecKind& kind, const std::vector<std::string>& args, std::ostream& out,
                   std::ostream& err) {
   if (wants_help(args)) {
@@ -274,7 +269,7 @@ int run_spec_kind(const SpecKind& kind, const std::vector<std::string>& args, st
     return kUsage;
   }
   return guarded_run(
-      command, [&] { return execute(kind, p, out, err); }, err);
+      command, [&] { return run_spec_job(kind, p, out, err); }, err);
 }
 
 }  // namespace mdem::cli

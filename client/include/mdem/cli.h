@@ -32,6 +32,10 @@ int probe(const std::vector<std::string>& args, std::ostream& out, std::ostream&
 // `mdem run <kind> [flags]`: runs a job in-process (client/src/run.cpp).
 int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
+// `mdem study <kind> --vary FIELD=v1,v2,...`: one spec run over several values of its settings,
+// with the errors of the kind's results against the study's reference (client/src/study.cpp).
+int study(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+
 // Commands on the mdemd daemon (client/src/remote_commands.cpp), which keep what they learn in
 // the local results database: `mdem submit <kind>` queues a job, `mdem watch ID` follows it into
 // the database, `mdem cancel ID` stops it. `--server HOST:PORT` (or $MDEM_SERVER, or the config
