@@ -1014,3 +1014,62 @@ TEST_F(FakeDaemon, CancelLsAndShowAskTheDaemon) {
 }
 
 }  // namespace
+
+namespace {
+
+int count_of(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+TEST_F(FakeDaemon, WatchCancelAndShowUseTheServerAndTokenFileOfTheSubmit) {
+  ASSERT_EQ(mdem_cli(dir_, "submit twist --layers 2 " + conn() + db()).code, 0);
+  EXPECT_EQ(ResultsStore(db_).find(kJobId)->token_file, fs::canonical(token_file_).string());
+
+  // The local ls marks the daemon's job whose state may be newer there.
+  Result r = mdem_cli(dir_, "ls" + db());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(r.out, "QUEUED*")) << r.out;
+  EXPECT_TRUE(contains(r.out, "the daemon may know more")) << r.out;
+  r = mdem_cli(dir_, "ls --json" + db());
+  EXPECT_EQ(json::parse(r.out)[0]["job_id"], kJobId) << r.out;
+  EXPECT_EQ(json::parse(r.out)[0]["state_may_be_outdated"], true) << r.out;
+
+  // No --server, no --token-file, no $MDEM_TOKEN: both come from the submit's record.
+  r = mdem_cli(dir_, "watch " + std::string(kJobId).substr(0, 6) + db());
+  ASSERT_EQ(r.code, 0) << r.err;
+  expect_complete_job(db_);
+  {
+    std::lock_guard lock(service_.mu);
+    EXPECT_EQ(service_.authorization.back(), std::string("Bearer ") + kToken);
+  }
+  r = mdem_cli(dir_, "ls" + db());
+  EXPECT_TRUE(contains(r.out, "SUCCEEDED")) << r.out;
+  EXPECT_FALSE(contains(r.out, "SUCCEEDED*")) << r.out;
+  EXPECT_FALSE(contains(r.out, "the daemon may know more")) << r.out;
+
+  r = mdem_cli(dir_, "cancel " + std::string(kJobId) + db());
+  ASSERT_EQ(r.code, 0) << r.err;
+
+  // show --server: a prefix of a job recorded here, with its token file ($MDEM_DB: --db is
+  // refused with --server) ...
+  r = mdem_cli(dir_, "show j-fake --json --server " + address(), {{"MDEM_DB", db_}});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(json::parse(r.out)["job_id"], kJobId);
+  // ... and a prefix of a job only the daemon knows (an empty database here).
+  r = mdem_cli(dir_, "show j-fa --json " + conn(), {{"MDEM_DB", dir_.file("other.db")}});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(json::parse(r.out)["job_id"], kJobId);
+  r = mdem_cli(dir_, "show j-nope " + conn(), {{"MDEM_DB", dir_.file("other.db")}});
+  EXPECT_EQ(r.code, mdem::cli::kJobFailed);
+  EXPECT_TRUE(contains(r.err, "no job 'j-nope'")) << r.err;
+
+  // No token anywhere: the advice once, not the daemon's words for the same thing after it.
+  r = mdem_cli(dir_, "ls --server " + address());
+  EXPECT_EQ(r.code, mdem::cli::kJobFailed);
+  EXPECT_EQ(count_of(r.err, "--token-file"), 1) << r.err;
+  EXPECT_FALSE(contains(r.err, "unknown token")) << r.err;
+}
+
+}  // namespace

@@ -392,7 +392,7 @@ TEST_F(ExportTest, LsListsJobsNewestFirstWithHighlights) {
   ASSERT_EQ(r.code, mdem::cli::kOk) << r.err;
   const json jobs = json::parse(r.out);
   ASSERT_EQ(jobs.size(), 2u);
-  EXPECT_EQ(jobs[0]["id"], kOtherJob);
+  EXPECT_EQ(jobs[0]["job_id"], kOtherJob);
   EXPECT_EQ(jobs[1]["summary"]["summary"]["morphology"], "helical");
   EXPECT_EQ(jobs[1]["spec"]["tubes"], 3);
 
@@ -412,7 +412,7 @@ TEST_F(ExportTest, ShowPrintsTheRecordWithCounts) {
   r = call(mdem::cli::show, {"--json", kJob, "--db", db_});
   ASSERT_EQ(r.code, mdem::cli::kOk) << r.err;
   const json j = json::parse(r.out);
-  EXPECT_EQ(j["id"], kJob);
+  EXPECT_EQ(j["job_id"], kJob);
   EXPECT_EQ(j["frames"], 7);
   EXPECT_EQ(j["snapshots"], 3);
   EXPECT_EQ(j["columns"], json(kColumns));

@@ -202,7 +202,8 @@ std::string read_token_file(const std::string& path, const std::string& origin) 
 }
 
 ConnectionSettings resolve_connection(const std::map<std::string, std::string>& flags,
-                                      const Env& env, const std::string& job_server) {
+                                      const Env& env, const std::string& job_server,
+                                      const std::string& job_token_file) {
   const ConfigFile cfg = load_config(env);
   const std::string in_config = cfg.path.empty() ? "" : " in config file '" + cfg.path + "'";
   ConnectionSettings c;
@@ -230,16 +231,23 @@ ConnectionSettings resolve_connection(const std::map<std::string, std::string>& 
   }
   check_server(c.server, c.server_origin);
 
+  const auto from_file = [&](const std::string& path, std::string origin) {
+    c.token_origin = std::move(origin);
+    c.token = read_token_file(path, c.token_origin);
+    std::error_code ec;
+    const fs::path abs = fs::absolute(path, ec);
+    c.token_file = ec ? path : abs.lexically_normal().string();
+  };
   if (flags.count("--token-file")) {
-    c.token_origin = "--token-file";
-    c.token = read_token_file(flags.at("--token-file"), c.token_origin);
+    from_file(flags.at("--token-file"), "--token-file");
+  } else if (!job_token_file.empty()) {
+    from_file(job_token_file, "the token file recorded with the job at submit");
   } else if (const auto t = non_empty(env, "MDEM_TOKEN")) {
     c.token_origin = "$MDEM_TOKEN";
     c.token = trim(*t);
     check_token(c.token, c.token_origin);
   } else if (cfg.token_file) {
-    c.token_origin = "key 'token_file'" + in_config;
-    c.token = read_token_file(*cfg.token_file, c.token_origin);
+    from_file(*cfg.token_file, "key 'token_file'" + in_config);
   }
 
   c.tls = flags.count("--tls") > 0 || cfg.tls.value_or(false);
@@ -342,9 +350,10 @@ std::string describe_status(const grpc::Status& status, const ConnectionSettings
       return "mdemd at " + s + " did not answer within " + std::to_string(kCallDeadlineMs / 1000) +
              " s (is it overloaded, or is " + s + " another service? check --server)" + detail;
     case grpc::StatusCode::UNAUTHENTICATED:
+      // The daemon's own message for a missing token says what this one says: not repeated.
       if (c.token.empty())
         return "mdemd at " + s + " wants a token and none is configured: give --token-file FILE, " +
-               "set $MDEM_TOKEN, or put 'token_file: FILE' in the config file" + detail;
+               "set $MDEM_TOKEN, or put 'token_file: FILE' in the config file";
       return "the server refused the token (from " + c.token_origin +
              "): check that it is the token mdemd's token file gives you" + detail;
     case grpc::StatusCode::PERMISSION_DENIED:

@@ -28,6 +28,8 @@ struct ConnectionSettings {
   std::string server_origin;  // where it came from, for messages: "--server", "$MDEM_SERVER", ...
   std::string token;          // "" when none is configured (the daemon will refuse the call)
   std::string token_origin;   // "--token-file FILE", "$MDEM_TOKEN", "token_file in FILE"
+  std::string token_file;     // the token's file as an absolute path ("" when the token is from
+                              // $MDEM_TOKEN or there is none): recorded with a submitted job
   bool tls = false;
   std::string ca_file;      // PEM root certificates for TLS; "" = the system's
   std::string config_path;  // the config file that was read; "" when none
@@ -62,11 +64,13 @@ ConfigFile load_config(const Env& env);
 bool server_named(const std::map<std::string, std::string>& flags, const Env& env);
 
 // The settings, each from the first source that has it: the flags, then the environment
-// ($MDEM_SERVER, $MDEM_TOKEN), then the config file. `job_server`, the daemon recorded with a
-// job in the local database, comes right after --server. A --ca-file implies --tls. Throws
-// SettingsError for a bad value or when no source names a server.
+// ($MDEM_SERVER, $MDEM_TOKEN), then the config file. `job_server` and `job_token_file`, the
+// daemon and token file recorded with a job in the local database (by `mdem submit`), come
+// right after --server and --token-file. A --ca-file implies --tls. Throws SettingsError for a
+// bad value or when no source names a server.
 ConnectionSettings resolve_connection(const std::map<std::string, std::string>& flags,
-                                      const Env& env, const std::string& job_server = "");
+                                      const Env& env, const std::string& job_server = "",
+                                      const std::string& job_token_file = "");
 
 // The token of a token file: its first non-empty line, trimmed of whitespace. `origin` names the
 // setting in messages ("--token-file", "token_file in FILE"). Throws SettingsError.

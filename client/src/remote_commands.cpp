@@ -165,7 +165,7 @@ double reconnect_timeout(const std::map<std::string, std::string>& given) {
 
 // The local record of a daemon's job, from what the daemon says of it. The state starts at
 // QUEUED unless given: the events bring it up to date as they are stored.
-JobRecord record_of(const v1::JobInfo& info, const std::string& server,
+JobRecord record_of(const v1::JobInfo& info, const ConnectionSettings& settings,
                     const std::string& state = job_state_name(v1::QUEUED)) {
   JobRecord r;
   r.id = info.job_id();
@@ -173,7 +173,8 @@ JobRecord record_of(const v1::JobInfo& info, const std::string& server,
   r.spec_json = info.has_spec() ? spec::to_json(info.spec(), false) : "{}";
   r.state = state;
   r.created_at = info.created_at();
-  r.server = server;
+  r.server = settings.server;
+  r.token_file = settings.token_file;  // watch and cancel use it again; the token is not stored
   return r;
 }
 
@@ -630,7 +631,7 @@ int run_submit(const std::vector<std::string>& args, std::ostream& out, std::ost
                       e.code, e.exit_code);
   }
   const v1::JobInfo& info = response.job();
-  JobRecord rec = record_of(info, settings.server, job_state_name(info.state()));
+  JobRecord rec = record_of(info, settings, job_state_name(info.state()));
   if (!info.has_spec()) rec.spec_json = spec::to_json(spec, false);
   if (rec.kind.empty()) rec.kind = kind->name;
   store.upsert_remote_job(rec);
@@ -680,13 +681,13 @@ int run_watch(const std::vector<std::string>& args, std::ostream& out, std::ostr
     return print_finished(store, *rec, as_json, out, err);  // everything is here already
 
   const ConnectionSettings settings =
-      resolve_connection(given, process_env(), rec ? rec->server : "");
+      resolve_connection(given, process_env(), rec ? rec->server : "", rec ? rec->token_file : "");
   JobClient client(settings);
   std::string id = rec ? rec->id : given_id;
   if (!rec) {
     const v1::JobInfo info = client.get(id);
     id = info.job_id();
-    store.upsert_remote_job(record_of(info, settings.server));
+    store.upsert_remote_job(record_of(info, settings));
   }
   return Watcher(client, store, id, as_json, timeout, out, err).run();
 }
@@ -708,7 +709,7 @@ int run_cancel(const std::vector<std::string>& args, std::ostream& out, std::ost
     if (rec && rec->server.empty()) rec.reset();  // a job of `mdem run`, not the daemon's
   }
   const ConnectionSettings settings =
-      resolve_connection(given, process_env(), rec ? rec->server : "");
+      resolve_connection(given, process_env(), rec ? rec->server : "", rec ? rec->token_file : "");
   JobClient client(settings);
   const v1::JobInfo info = client.cancel(rec ? rec->id : given_id);
   const std::string state = job_state_name(info.state());
@@ -719,7 +720,9 @@ int run_cancel(const std::vector<std::string>& args, std::ostream& out, std::ost
     out << "\n";
     return kOk;
   }
-  if (parse_job_state(state) == v1::CANCELLED)
+  if (parse_job_state(state) == v1::CANCELLED && info.started_at().empty())
+    out << "cancelled " << info.job_id() << " before it started; it produced nothing\n";
+  else if (parse_job_state(state) == v1::CANCELLED)
     out << "cancelled " << info.job_id() << "; what it produced is kept (`mdem watch "
         << info.job_id() << "` fetches it)\n";
   else if (is_final(state))
@@ -739,6 +742,30 @@ std::string note_text(const v1::JobInfo& info) {
   if (!info.reason().empty()) text += (text.empty() ? "" : "; ") + info.reason();
   constexpr std::size_t kMax = 60;
   return text.size() > kMax ? text.substr(0, kMax - 3) + "..." : text;
+}
+
+// The daemon's id of the job that `id` names: the id itself, or the one of the caller's jobs on
+// the daemon whose id starts with it (UsageError when several do; the daemon's NOT_FOUND when
+// none does).
+std::string daemon_job_id(JobClient& client, const std::string& id) {
+  try {
+    return client.get(id).job_id();
+  } catch (const RemoteError& e) {
+    if (e.code != grpc::StatusCode::NOT_FOUND) throw;
+    std::vector<std::string> matches;
+    const v1::ListJobsResponse mine = client.list(false, 1000);
+    for (const v1::JobInfo& info : mine.jobs())
+      if (info.job_id().rfind(id, 0) == 0) matches.push_back(info.job_id());
+    if (matches.empty()) throw;
+    if (matches.size() > 1) {
+      std::string list;
+      for (const std::string& m : matches) list += (list.empty() ? "" : ", ") + m;
+      throw UsageError("job id prefix '" + id + "' names " + std::to_string(matches.size()) +
+                       " jobs on mdemd at " + client.settings().server + " (" + list +
+                       "): give more of the id");
+    }
+    return matches.front();
+  }
 }
 
 }  // namespace
@@ -778,8 +805,21 @@ int remote_ls(const std::map<std::string, std::string>& given, std::ostream& out
 
 int remote_show(const std::string& id, const std::map<std::string, std::string>& given,
                 std::ostream& out, std::ostream& err) {
-  JobClient client(resolve_connection(given, process_env()));
-  const v1::JobInfo info = client.get(id);
+  // A job recorded here (an id or a prefix, as `mdem watch` takes) brings its token file.
+  std::optional<JobRecord> rec;
+  try {
+    const std::string path = ResultsStore::default_path();
+    if (std::error_code ec; fs::exists(path, ec)) rec = ResultsStore(path).find(id);
+  } catch (const StoreError&) {  // ambiguous or unreadable here: the daemon decides
+  }
+  ConnectionSettings settings =
+      resolve_connection(given, process_env(), rec ? rec->server : "", rec ? rec->token_file : "");
+  if (rec && rec->server != settings.server) {  // another daemon's job of the same prefix
+    rec.reset();
+    settings = resolve_connection(given, process_env());
+  }
+  JobClient client(settings);
+  const v1::JobInfo info = client.get(rec ? rec->id : daemon_job_id(client, id));
   if (given.count("--json")) {
     json j = info_json(info);
     j["server"] = client.settings().server;

@@ -8,10 +8,13 @@
 #include "flags.h"
 #include "mdem/cli.h"
 #include "mdem/job_kinds.h"
+#include "mdem/job_state.h"
 #include "plot.h"
 #include "remote.h"
 #include "remote_commands.h"
 #include "results_store.h"
+#include "study_commands.h"
+#include "study_store.h"
 
 namespace mdem::cli {
 namespace {
@@ -174,15 +177,23 @@ JobRecord resolve(const ResultsStore& store, const std::string& id) {
   return std::move(*job);
 }
 
+// A daemon's job not yet seen ending here: the daemon may know a later state than this record.
+bool may_be_outdated(const JobRecord& job) { return !job.server.empty() && !is_final(job.state); }
+
 json job_json(const JobRecord& job) {
-  return json{{"id", job.id},
-              {"kind", job.kind},
-              {"state", job.state},
-              {"reason", job.reason},
-              {"created_at", job.created_at},
-              {"finished_at", job.finished_at},
-              {"spec", parse_or_text(job.spec_json)},
-              {"summary", parse_or_text(job.summary_json)}};
+  json j{{"job_id", job.id},
+         {"kind", job.kind},
+         {"state", job.state},
+         {"reason", job.reason},
+         {"created_at", job.created_at},
+         {"finished_at", job.finished_at}};
+  if (!job.server.empty()) {
+    j["server"] = job.server;
+    j["state_may_be_outdated"] = may_be_outdated(job);
+  }
+  j["spec"] = parse_or_text(job.spec_json);
+  j["summary"] = parse_or_text(job.summary_json);
+  return j;
 }
 
 std::string scalar_text(const json& v) { return v.is_string() ? v.get<std::string>() : v.dump(); }
@@ -225,9 +236,11 @@ bool ask_daemon(const std::map<std::string, std::string>& given) {
 }
 
 int run_ls(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  FlagSpec spec{{"--db", "--limit"}, {"--json", "--all", "--local"}};
+  FlagSpec spec{{"--db", "--limit", "--study"}, {"--json", "--all", "--local"}};
   add_connection_flags(spec);
   auto given = parse_flags(args, spec);
+  if (given.count("--study") && !ask_daemon(given))
+    return ls_study(given["--study"], db_path(given), given.count("--json") > 0, out);
   if (ask_daemon(given)) return remote_ls(given, out, err);
   const std::string path = db_path(given);
   std::vector<JobRecord> jobs;
@@ -243,9 +256,16 @@ int run_ls(const std::vector<std::string>& args, std::ostream& out, std::ostream
     return kOk;
   }
   std::vector<std::vector<std::string>> rows = {{"ID", "KIND", "STATE", "CREATED", "SUMMARY"}};
-  for (const JobRecord& j : jobs)
-    rows.push_back({j.id, j.kind, j.state, j.created_at, highlights(j)});
+  bool outdated = false;
+  for (const JobRecord& j : jobs) {
+    outdated = outdated || may_be_outdated(j);
+    rows.push_back(
+        {j.id, j.kind, j.state + (may_be_outdated(j) ? "*" : ""), j.created_at, highlights(j)});
+  }
   print_table(out, rows);
+  if (outdated)
+    out << "* a daemon's job as last watched; the daemon may know more (`mdem watch ID` "
+           "fetches it, `mdem ls --server HOST:PORT` asks the daemon)\n";
   return kOk;
 }
 
@@ -328,6 +348,12 @@ int run_export(const std::vector<std::string>& args, std::ostream& out) {
 int run_plot(const std::vector<std::string>& args, std::ostream& out) {
   const FlagSpec spec{{"--out", "--columns", "--x", "--db"}, {}};
   auto [id, given] = parse_id_and_flags(args, spec);
+  if (is_study_id(id)) {
+    for (const char* f : {"--columns", "--x"})
+      if (given.count(f))
+        throw UsageError(std::string(f) + ": not for a study (its plot is fixed)");
+    return plot_study(id, db_path(given), given.count("--out") ? given["--out"] : "", out);
+  }
   if (given.count("--out")) plot_terminal(given["--out"]);  // a bad extension before any work
   const auto store = open_store(db_path(given), id);
   const JobRecord job = resolve(*store, id);

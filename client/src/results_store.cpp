@@ -51,7 +51,8 @@ CREATE TABLE jobs (
   columns_json TEXT NOT NULL DEFAULT '[]',
   server TEXT NOT NULL DEFAULT '',
   last_seq INTEGER NOT NULL DEFAULT 0,
-  runner TEXT NOT NULL DEFAULT ''
+  runner TEXT NOT NULL DEFAULT '',
+  token_file TEXT NOT NULL DEFAULT ''
 );
 CREATE TABLE frames (
   job_id TEXT NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,
@@ -80,10 +81,12 @@ CREATE TABLE snapshots (
   UNIQUE (job_id, seq)
 );
 )sql";
-// jobs.server and jobs.last_seq (a daemon's job: where it runs, the last event applied) and
-// jobs.runner (a job run in-process: the process running it, see this_process()) came after
-// version 1 was released: an older file gets them by ALTER TABLE when opened (kMigrations), so
-// the version stays 1 and an older mdem still reads the file.
+// jobs.server and jobs.last_seq (a daemon's job: where it runs, the last event applied),
+// jobs.runner (a job run in-process: the process running it, see this_process()) and
+// jobs.token_file (a daemon's job: the token file it was submitted with, never the token) came
+// after version 1 was released: an older file gets them by ALTER TABLE when opened (kMigrations),
+// so the version stays 1 and an older mdem still reads the file.
+//
 // frames.vals: float64 per column. snapshots: x = float64 x,y,z per element; q = float64
 // w,x,y,z; radius float64; kind, tube, idx int32; scalar_names a JSON array; scalars float64,
 // n values per name in the order of the names; v float64 vx,vy,vz per element (empty: not
@@ -127,7 +130,8 @@ JOIN json_each(j.columns_json) AS c ON c.key = v.col;
 constexpr const char* kFirstJobColumns =
     "id, kind, spec_json, state, reason, summary_json, created_at, finished_at";
 constexpr const char* kRemoteJobColumns =
-    "id, kind, spec_json, state, reason, summary_json, created_at, finished_at, server, last_seq";
+    "id, kind, spec_json, state, reason, summary_json, created_at, finished_at, server, last_seq, "
+    "token_file";
 
 struct Migration {
   const char* column;
@@ -139,6 +143,7 @@ constexpr Migration kMigrations[] = {
     {"server", "server TEXT NOT NULL DEFAULT ''", "''"},
     {"last_seq", "last_seq INTEGER NOT NULL DEFAULT 0", "0"},
     {"runner", "runner TEXT NOT NULL DEFAULT ''", "''"},
+    {"token_file", "token_file TEXT NOT NULL DEFAULT ''", "''"},
 };
 
 // Columns added to the snapshots table since the first schema, in the order they are read.
@@ -389,7 +394,8 @@ void migrate(Impl& db) {
       if (!db.has_column("jobs", m.column)) db.missing.insert(m.column);
     for (const Migration& m : kSnapshotMigrations)
       if (!db.has_column("snapshots", m.column)) db.missing_snapshot.insert(m.column);
-    db.remote_columns = !db.missing.count("server") && !db.missing.count("last_seq");
+    db.remote_columns = !db.missing.count("server") && !db.missing.count("last_seq") &&
+                        !db.missing.count("token_file");
     return;
   }
   Transaction t(db);
@@ -493,8 +499,8 @@ void check_snapshot_values(const Impl& db, const Snapshot& s) {
 // ---- rows <-> records -------------------------------------------------------------------------
 
 JobRecord read_job(const Query& q) {
-  return JobRecord{q.text(0), q.text(1), q.text(2), q.text(3),    q.text(4), q.text(5),
-                   q.text(6), q.text(7), q.text(8), q.integer(9), q.text(10)};
+  return JobRecord{q.text(0), q.text(1), q.text(2), q.text(3),    q.text(4),  q.text(5),
+                   q.text(6), q.text(7), q.text(8), q.integer(9), q.text(10), q.text(11)};
 }
 
 // A job run in-process whose process is gone without finishing it (killed outright, or its
@@ -820,14 +826,16 @@ void ResultsStore::upsert_remote_job(const JobRecord& job) {
   impl_->call([&](StoreDb& db) {
     Query q(db,
             std::string("INSERT INTO jobs (") + kRemoteJobColumns +
-                ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (id) DO UPDATE SET kind = "
+                ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (id) DO UPDATE SET kind = "
                 "excluded.kind, spec_json = excluded.spec_json, server = excluded.server, "
-                "created_at = excluded.created_at",
+                "created_at = excluded.created_at, token_file = CASE WHEN excluded.token_file "
+                "<> '' THEN excluded.token_file ELSE token_file END",
             "cannot record job '" + job.id + "'");
     q.bind(1, job.id).bind(2, job.kind).bind(3, job.spec_json).bind(4, job.state);
     q.bind(5, job.reason).bind(6, job.summary_json);
     q.bind(7, job.created_at.empty() ? utc_now("%Y-%m-%dT%H:%M:%SZ") : job.created_at);
     q.bind(8, job.finished_at).bind(9, job.server).bind(10, job.last_seq);
+    q.bind(11, job.token_file);
     q.run();
   });
 }

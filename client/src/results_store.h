@@ -31,6 +31,8 @@ struct JobRecord {
   long last_seq = 0;         // of a daemon's job: the last event applied here (0: none yet)
   std::string runner;        // of a job run in-process: "HOST BOOT-ID PID START-TIME" of the
                              // process that runs it (set by create_job); "" when unknown
+  std::string token_file;    // of a daemon's job: the token file (absolute path, never the
+                             // token) it was submitted or first watched with; "" when none
 };
 
 // Events of a daemon's job (mdem watch) applied together, in one transaction with the sequence
@@ -74,7 +76,8 @@ class ResultsStore {
   void set_state(const std::string& id, const std::string& state, const std::string& reason);
 
   // A daemon's job (job.server set): inserted when new; when the id exists, its kind, spec,
-  // server and creation time are updated and its state, results and last_seq are kept.
+  // server and creation time (and its token file, when job.token_file is set) are updated and its
+  // state, results and last_seq are kept.
   void upsert_remote_job(const JobRecord& job);
   // The last event of a daemon's job applied here (0: none; StoreError for an unknown job).
   long last_seq(const std::string& id) const;
