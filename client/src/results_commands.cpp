@@ -13,8 +13,6 @@
 #include "remote.h"
 #include "remote_commands.h"
 #include "results_store.h"
-#include "study_commands.h"
-#include "study_store.h"
 
 namespace mdem::cli {
 namespace {
@@ -236,11 +234,9 @@ bool ask_daemon(const std::map<std::string, std::string>& given) {
 }
 
 int run_ls(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  FlagSpec spec{{"--db", "--limit", "--study"}, {"--json", "--all", "--local"}};
+  FlagSpec spec{{"--db", "--limit"}, {"--json", "--all", "--local"}};
   add_connection_flags(spec);
   auto given = parse_flags(args, spec);
-  if (given.count("--study") && !ask_daemon(given))
-    return ls_study(given["--study"], db_path(given), given.count("--json") > 0, out);
   if (ask_daemon(given)) return remote_ls(given, out, err);
   const std::string path = db_path(given);
   std::vector<JobRecord> jobs;
@@ -348,12 +344,6 @@ int run_export(const std::vector<std::string>& args, std::ostream& out) {
 int run_plot(const std::vector<std::string>& args, std::ostream& out) {
   const FlagSpec spec{{"--out", "--columns", "--x", "--db"}, {}};
   auto [id, given] = parse_id_and_flags(args, spec);
-  if (is_study_id(id)) {
-    for (const char* f : {"--columns", "--x"})
-      if (given.count(f))
-        throw UsageError(std::string(f) + ": not for a study (its plot is fixed)");
-    return plot_study(id, db_path(given), given.count("--out") ? given["--out"] : "", out);
-  }
   if (given.count("--out")) plot_terminal(given["--out"]);  // a bad extension before any work
   const auto store = open_store(db_path(given), id);
   const JobRecord job = resolve(*store, id);
