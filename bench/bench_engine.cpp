@@ -12,6 +12,7 @@
 #include "mdem/core/units.h"
 #include "mdem/force/bond/parallel_bond.h"
 #include "mdem/force/contact/anisotropic_vdw.h"
+#include "mdem/force/damping/viscous_contact_damping.h"
 #include "mdem/integrate/system.h"
 #include "mdem/job/twist_job.h"
 #include "mdem/neighbor/neighbor_list.h"
@@ -291,6 +292,48 @@ void BM_TwistRopeSteps(benchmark::State& state) {
   state.counters["dt_fs"] = sys.dt() * 1e3;
 }
 BENCHMARK(BM_TwistRopeSteps)->Apply(one_and_two_threads)->Iterations(4);
+
+// The CNT contact dashpot alone on the twist job's 91-tube rope with thermal velocities (300 K):
+// one evaluation over the vdW sub-list into a sink, scalar reference (evaluation:0) against the
+// batched SIMD path (evaluation:1), interleaved in one process; ns_per_pair per listed pair.
+void BM_TwistRopeDashpot(benchmark::State& state) {
+  static const Elements rope = [] {
+    TwistJobSpec spec;
+    spec.loading.torque_max = units::nNnm(64);
+    spec.loading.rate = units::nNnm(1);
+    spec.temperature_k = 300;
+    TwistJob job(spec, IntegratorSettings{});
+    return job.system().elements();
+  }();
+  const int threads = static_cast<int>(state.range(0));
+  const auto eval = state.range(1) ? DashpotEvaluation::Batched : DashpotEvaluation::Scalar;
+  const ViscousContactDamping model(ContactDampingParams{}, eval);
+  const ForceModel& dashpot = model;  // through the virtual call, as System runs it
+  NeighborList nl(dashpot.cutoff(), IntegratorSettings{}.skin);
+  nl.set_exclusion([&dashpot](const Elements& e, std::size_t i, std::size_t j) {
+    return dashpot.excludes(e, i, j);
+  });
+  nl.set_owner(&dashpot);
+  nl.build(rope);
+  ForceSink sink;
+  sink.resize(rope.size(), threads, true);
+  dashpot.compute(rope, &nl, sink);  // warm-up
+  for (auto _ : state) {
+    state.PauseTiming();
+    sink.clear();
+    state.ResumeTiming();
+    dashpot.compute(rope, &nl, sink);
+  }
+  state.counters["ns_per_pair"] = benchmark::Counter(
+      static_cast<double>(nl.pair_count()) * static_cast<double>(state.iterations()) * 1e-9,
+      benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["pairs"] = static_cast<double>(nl.pair_count());
+}
+BENCHMARK(BM_TwistRopeDashpot)
+    ->ArgNames({"threads", "evaluation"})
+    ->ArgsProduct({{1, 2}, {0, 1}})
+    ->UseRealTime()
+    ->Unit(benchmark::kMicrosecond);
 
 // The neighbour-list build alone on the (unrelaxed) film, with the vdW model's exclusion.
 void BM_FilmNeighborBuild(benchmark::State& state) {

@@ -17,6 +17,12 @@
 
 namespace mdem {
 
+// How ContactDampingKernel evaluates its pairs. Batched (the default): in batches of pairs in
+// structure-of-arrays form with SIMD on the widest instruction set of the CPU chosen at run time
+// (contact_damping_simd_target()); equal to the scalar kernel to round-off, not bit for bit.
+// Scalar: one pair at a time (pair()), the reference.
+enum class DashpotEvaluation { Batched, Scalar };
+
 struct ContactDampingParams {
   double ratio = 0.03;            // ψ (thesis: 0.03)
   double stiffness = 100.0;       // k (eV/nm²)
@@ -33,7 +39,8 @@ class ContactDampingKernel {
 
   // Throws std::invalid_argument for a ratio outside [0, 10], a non-positive stiffness or cutoff,
   // or a negative exclusion.
-  explicit ContactDampingKernel(ContactDampingParams p);
+  explicit ContactDampingKernel(ContactDampingParams p,
+                                DashpotEvaluation e = DashpotEvaluation::Batched);
   std::string_view name() const { return "viscous_contact_damping"; }
   std::string_view owner() const { return "anisotropic_vdw"; }
   bool active() const { return p_.ratio != 0; }
@@ -45,6 +52,8 @@ class ContactDampingKernel {
     return el.cnt_pair_excluded(i, j, p_.intra_tube_exclusion);
   }
   bool pair(const Elements& el, std::size_t i, std::size_t j, const Vec3& d, PairForces& out) const;
+  bool batched() const { return eval_ == DashpotEvaluation::Batched; }
+  void batch(const Elements& el, PairBatch& b) const;
   void stiffness(const Elements& el, std::size_t i, std::size_t j, const Vec3& d,
                  StiffnessSums& s) const;
   const ContactDampingParams& params() const { return p_; }
@@ -52,13 +61,19 @@ class ContactDampingKernel {
  private:
   double coefficient(const Elements& el, std::size_t i, std::size_t j) const;
   ContactDampingParams p_;
+  DashpotEvaluation eval_;
 };
+
+// The instruction set of the batched path on this CPU (Highway's name: "AVX3", "AVX2", ...).
+const char* contact_damping_simd_target();
 
 extern template class PairModel<ContactDampingKernel>;
 
 class ViscousContactDamping final : public PairModel<ContactDampingKernel> {
  public:
-  explicit ViscousContactDamping(ContactDampingParams p) : PairModel<ContactDampingKernel>(p) {}
+  explicit ViscousContactDamping(ContactDampingParams p,
+                                 DashpotEvaluation e = DashpotEvaluation::Batched)
+      : PairModel<ContactDampingKernel>(p, e) {}
   const ContactDampingParams& params() const { return k_.params(); }
 };
 
