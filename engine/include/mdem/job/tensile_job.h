@@ -38,6 +38,14 @@
 namespace mdem {
 
 class GripStressSampler;
+class ParallelBond;
+
+// The tensile job's force loop on `el`: intra-tube parallel bonds (their rest state `rest`'s
+// bonds when given, else el's configuration, from el.topology), the CNT–CNT, NP–CNT and NP–NP
+// contacts and, with dashpot_ratio ψ > 0, the dashpots of all three.
+std::unique_ptr<System> tensile_film_system(Elements el, const IntegratorSettings& settings,
+                                            double dashpot_ratio,
+                                            const ParallelBond* rest = nullptr);
 
 // When the NPs enter the film (tensile.md §3.2).
 enum class NpDeposit {
@@ -85,12 +93,14 @@ struct TensileJobSpec {
   double sample_every_ps = 1.0;
 
   // When the relaxation's aligned pairs (both counts) and pores are recorded (ps since the
-  // relaxation's start, each in [0, relax_ps]; §3.4: 0, 1, 2, 3, 4, 4.5 ns). The registry-free
+  // relaxation's start, each in [0, 10^7], at most 1000; times past relax_ps are not reached;
+  // §3.4: 0, 1, 2, 3, 4, 4.5 ns). The registry-free
   // count for the stabilisation time is sampled every relax_count_every_ps (> 0; §3.4: 15 ps).
   std::vector<double> relax_report_ps = {0, 1000, 2000, 3000, 4000, 4500};
   double relax_count_every_ps = 15.0;
   // Strains at which a monotonic test records aligned pairs, pores, bending energy and width
-  // (each in [0, target_strain]; §3.5: 0, 2, 10, 20 %). The fraction of tubes in tension is taken
+  // (fractions, each in [0, 10], at most 1000; strains past the target are not reached; unused
+  // by a cyclic test; §3.5: 0, 2, 10, 20 %). The fraction of tubes in tension is taken
   // at 2 % when the test reaches it; fragments at 50, 100, 150, 200 % when reached.
   std::vector<double> test_report_strains = {0, 0.02, 0.1, 0.2};
 
@@ -131,10 +141,16 @@ struct StrainFrame {
 class TensileJob final : public Job {
  public:
   // Validates the spec, generates the film (quick: no dynamics) and sets up the stages. The time
-  // step: settings.dt if given, else the auto step (safety × critical) of the generated film,
-  // fixed for every stage so the grips' motion law is integrated exactly. Throws
+  // step: settings.dt if given, else 0.9 × the auto step (safety × critical) of the generated
+  // film, fixed for every stage so the grips' motion law is integrated exactly. The test stage
+  // runs one sampling interval past the loading's end (the sampler lags one evaluation). Throws
   // std::invalid_argument for a bad spec or a film whose NPs do not fit.
   TensileJob(const TensileJobSpec& spec, IntegratorSettings settings);
+  // The same on a film built by the caller (e.g. straight tubes for an analytic check): `film`
+  // holds its CNT segments, bonded along their chains in film.topology, and any NPs. Of
+  // spec.film only side (L0 and W) and thickness are read; the rest of the spec as above
+  // (nanoparticles > 0 with AfterRelax deposits that many more).
+  TensileJob(Elements film, const TensileJobSpec& spec, IntegratorSettings settings);
   TensileJob(const TensileJob&) = delete;
   TensileJob& operator=(const TensileJob&) = delete;
   ~TensileJob() override;
@@ -178,6 +194,7 @@ class TensileJob final : public Job {
   class DepositStage;
   class OptionalStage;
   void stage_finished(std::size_t k) override;
+  void build(Elements el);  // the system from the film, then the stages
 
   TensileJobSpec spec_;
   IntegratorSettings settings_;

@@ -1,0 +1,353 @@
+// The tensile job (engine/include/mdem/job/tensile_job.h, tensile.md §3, §5): its stages, the
+// grip stress of an analytic film through the job, the cyclic loop of an elastic film,
+// checkpoints inside every stage, determinism and bad specs. Tiny films only (a few hundred
+// elements): the Table 5-1 films belong in bench/ and the validation runs.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "mdem/core/cnt.h"
+#include "mdem/core/units.h"
+#include "mdem/force/bond/parallel_bond.h"
+#include "mdem/job/tensile_job.h"
+#include "mdem/observe/grip_stress.h"
+#include "mdem/scene/tube_builder.h"
+
+namespace mdem {
+namespace {
+
+// A tiny random film: 60 × 60 × 11 nm, 6 tubes of 30 segments; short stages.
+TensileJobSpec tiny_spec() {
+  TensileJobSpec s;
+  s.film.side = 60;
+  s.film.thickness = 11;
+  s.film.tubes = 6;
+  s.film.segments_per_tube = 30;
+  s.seed = 7;
+  s.prerelax.max_time = 3;
+  s.prerelax.check_every = 50;
+  s.relax_ps = 4;
+  s.relax_report_ps = {0, 2, 4};
+  s.relax_count_every_ps = 1;
+  s.monotonic.ramp_time = 2;
+  s.monotonic.strain_rate = 2e-3;
+  s.monotonic.target_strain = 0.006;
+  s.test_report_strains = {0, 0.004};
+  return s;
+}
+
+IntegratorSettings one_thread() {
+  IntegratorSettings is;
+  is.threads = 1;
+  return is;
+}
+
+struct RunLog {
+  std::vector<std::string> stages;  // each stage's name once, in the order they ran
+  std::vector<SeriesFrame> frames;
+};
+
+RunLog run(TensileJob& job, const std::function<bool()>& cancelled = {},
+           const std::function<void(long)>& checkpoint = {}) {
+  RunLog log;
+  JobObserver obs;
+  obs.progress = [&](const JobProgress& p) {
+    if (log.stages.empty() || log.stages.back() != p.stage) log.stages.push_back(p.stage);
+  };
+  obs.frame = [&](const SeriesFrame& f) { log.frames.push_back(f); };
+  obs.cancelled = cancelled;
+  obs.checkpoint = checkpoint;
+  JobCadence c;
+  c.frame_every_ps = 1.0;
+  run_job(job, c, obs);
+  return log;
+}
+
+const SummaryValue* find(const Summary& s, const std::string& key) {
+  for (const auto& [k, v] : s)
+    if (k == key) return &v;
+  return nullptr;
+}
+
+double num(const Summary& s, const std::string& key) {
+  const SummaryValue* v = find(s, key);
+  if (!v) {
+    ADD_FAILURE() << "summary has no " << key;
+    return NAN;
+  }
+  if (const double* d = std::get_if<double>(v)) return *d;
+  if (const long* l = std::get_if<long>(v)) return static_cast<double>(*l);
+  ADD_FAILURE() << key << " is not a number";
+  return NAN;
+}
+
+// The positions, velocities and orientations of every element, as bytes.
+std::string state_bytes(const System& sys) {
+  const Elements& el = sys.elements();
+  std::string b;
+  auto add = [&](const void* p, std::size_t n) { b.append(static_cast<const char*>(p), n); };
+  add(el.x.data(), el.x.size() * sizeof(Vec3));
+  add(el.v.data(), el.v.size() * sizeof(Vec3));
+  add(el.q.data(), el.q.size() * sizeof(Quat));
+  add(el.w.data(), el.w.size() * sizeof(Vec3));
+  return b;
+}
+
+TEST(TensileJob, StagesRunInOrderAndEachReports) {
+  TensileJob job(tiny_spec(), one_thread());
+  const RunLog log = run(job);
+  EXPECT_EQ(log.stages, (std::vector<std::string>{"prerelax", "relax", "tensile"}));
+  const Summary s = job.summary();
+  // The pre-relaxation says why it stopped and how long it took (the cap is 3 ps).
+  const PrerelaxRecord& pr = job.prerelax_record();
+  EXPECT_TRUE(pr.ran);
+  EXPECT_FALSE(pr.reason.empty());
+  EXPECT_GT(pr.duration_ps, 0);
+  EXPECT_LE(pr.duration_ps, 3 + job.system().dt());
+  // The relaxation recorded its report times, and the test its strains.
+  ASSERT_EQ(job.relax_frames().size(), 3u);
+  EXPECT_NEAR(job.relax_frames()[2].t, 4, job.system().dt());
+  ASSERT_EQ(job.strain_frames().size(), 2u);
+  EXPECT_GE(job.strain_frames()[1].strain, 0.004);
+  // The clock restarted after the pre-relaxation: the test ran from the relaxation's end.
+  const double loading = job.protocol().duration();
+  EXPECT_NEAR(job.protocol().start_time(), 4, job.system().dt());
+  // It ends one sampling interval (1 ps) and a step past the loading's end.
+  const double dt = job.system().dt();
+  EXPECT_NEAR(job.system().time(), job.protocol().start_time() + loading + 1 + dt, 1.01 * dt);
+  EXPECT_GE(num(s, "final_strain"), 0.006);
+  EXPECT_LE(num(s, "final_strain"), 0.006 + 2e-3 * (1 + 2 * dt));
+  EXPECT_EQ(num(s, "segments"), 180);
+  // Stage codes in the frames: 0 pre-relax, 1 relax, 3 test, in that order.
+  double last = 0;
+  for (const SeriesFrame& f : log.frames) {
+    EXPECT_GE(f.values[1], last);
+    last = f.values[1];
+  }
+  EXPECT_EQ(last, 3);
+
+  // Ready-to-relax: no relaxation stage; the test starts at the pre-relaxed film's time 0.
+  TensileJobSpec r = tiny_spec();
+  r.relax_ps = 0;
+  TensileJob ready(r, one_thread());
+  EXPECT_EQ(run(ready).stages, (std::vector<std::string>{"prerelax", "tensile"}));
+  EXPECT_EQ(ready.protocol().start_time(), 0.0);
+  EXPECT_TRUE(ready.relax_frames().empty());
+  EXPECT_FALSE(ready.relax_stabilisation_ps().has_value());
+}
+
+TEST(TensileJob, NanoparticlesDepositedAfterRelaxation) {
+  TensileJobSpec s = tiny_spec();
+  s.nanoparticles = 4;
+  TensileJob job(s, one_thread());
+  const RunLog log = run(job);
+  EXPECT_EQ(log.stages,
+            (std::vector<std::string>{"prerelax", "relax", "deposit", "np_prerelax", "tensile"}));
+  const Summary sum = job.summary();
+  EXPECT_EQ(num(sum, "nanoparticles"), 4);
+  EXPECT_EQ(num(sum, "segments"), 180);
+  // Before relaxation: part of the generated film, no deposit stage.
+  s.np_deposit = NpDeposit::BeforeRelax;
+  TensileJob before(s, one_thread());
+  EXPECT_EQ(run(before).stages, (std::vector<std::string>{"prerelax", "relax", "tensile"}));
+  EXPECT_EQ(num(before.summary(), "nanoparticles"), 4);
+}
+
+// N straight parallel tubes along x, 10 nm apart in y (beyond every contact's reach), through
+// both grips.
+Elements straight_tubes(int n_tubes, int segments) {
+  Elements el;
+  const double T = cnt::kSegmentLength;
+  for (int k = 0; k < n_tubes; ++k)
+    add_straight_tube(el, Vec3(-0.5 * (segments - 1) * T, 10.0 * (k - 0.5 * (n_tubes - 1)), 0),
+                      Vec3::UnitX(), segments, k);
+  return el;
+}
+
+// The analytic film's spec: ready-to-relax, no dashpots, 60 nm nominal side.
+TensileJobSpec analytic_spec() {
+  TensileJobSpec s;
+  s.film.side = 60;
+  s.film.thickness = 11;
+  s.relax_ps = 0;
+  s.dashpot_ratio = 0;
+  s.prerelax.check_every = 20;
+  return s;
+}
+
+// Bonds that stretch between the grips: those not wholly inside one grip.
+int free_bonds(const TensileJob& job) {
+  const Elements& el = const_cast<TensileJob&>(job).system().elements();
+  std::vector<int> grip(el.size(), 0);
+  for (std::size_t i : el.group_indices(kGripLeft)) grip[i] = 1;
+  for (std::size_t i : el.group_indices(kGripRight)) grip[i] = 2;
+  int n = 0;
+  for (const Bond& b : const_cast<TensileJob&>(job).system().find<ParallelBond>()->bonds())
+    n += !(grip[b.i] != 0 && grip[b.i] == grip[b.j]);
+  return n;
+}
+
+TEST(TensileJob, AnalyticFilmModulusAndGripBalance) {
+  // 3 tubes of 44 segments (58.3 nm) on a 60 nm film, pulled at 1e-3/ps after a 50 ps ramp, to
+  // 2.5 %. Each bond's axial force is kn·A·u_n and the free bonds share the grips' separation,
+  // so σ = N·kn·A·ε·L0/(n_free·W·H): E = N·kn·A·L0/(n_free·W·H) (kn·A·T = EA of tensile.md §1).
+  TensileJobSpec s = analytic_spec();
+  s.local_damping = 0.1;
+  s.monotonic.ramp_time = 50;
+  s.monotonic.strain_rate = 1e-3;
+  s.monotonic.target_strain = 0.025;
+  s.test_report_strains = {};
+  const int N = 3;
+  TensileJob job(straight_tubes(N, 44), s, one_thread());
+  run(job);
+  const Summary sum = job.summary();
+  const int n_free = free_bonds(job) / N;
+  const double kn_area = cnt_bond_stiffness().kn_area;
+  const double expected = units::to_GPa(N * kn_area * 60.0 / (n_free * 60.0 * 11.0));
+  EXPECT_NEAR(num(sum, "youngs_modulus_GPa"), expected, 0.01 * expected)
+      << n_free << " free bonds per tube";
+  // Grip reactions balance (F_L + F_R is what the free film gains in momentum per unit time):
+  // after the ramp, |F_L + F_R| stays a small fraction of |F_L|.
+  double worst = 0;
+  for (const GripSample& g : job.stress_sampler().samples())
+    if (g.t > job.protocol().start_time() + 60)
+      worst = std::max(worst, std::abs(g.f_left + g.f_right) / std::abs(g.f_left));
+  EXPECT_LT(worst, 1e-2);
+  EXPECT_GE(job.stress_sampler().samples().size(), 50u);
+}
+
+TEST(TensileJob, ElasticCyclicLoopEnclosesNoArea) {
+  // Undamped (no dashpots, no local damping), slow (period 100 ps ≫ the film's ~3 ps transit),
+  // purely elastic: the loop area ∮σ dε vanishes against σ_peak·ε_a.
+  TensileJobSpec s = analytic_spec();
+  s.mode = TensileMode::Cyclic;
+  s.cyclic.amplitude = 0.01;
+  s.cyclic.mean_rate = 0;
+  s.cyclic.period = 100;
+  s.cyclic.cycles = 2;
+  TensileJob job(straight_tubes(3, 44), s, one_thread());
+  run(job);
+  const Summary sum = job.summary();
+  ASSERT_EQ(num(sum, "cycles_complete"), 2);
+  double peak = 0;
+  for (const GripSample& g : job.stress_sampler().samples())
+    peak = std::max(peak, std::abs(g.stress));
+  const double scale = 1000 * peak * 0.01;  // J/cm³
+  ASSERT_GT(scale, 0);
+  for (int k = 1; k <= 2; ++k)
+    EXPECT_LT(std::abs(num(sum, "cycle_" + std::to_string(k) + "_loop_area_J_cm3")), 1e-3 * scale)
+        << "cycle " << k;
+}
+
+// Runs a fresh job to the end, after loading a checkpoint taken inside `stage` (at its
+// `after`-th checkpoint opportunity) into another fresh job; compares with an uninterrupted run.
+void expect_resume_identical(const TensileJobSpec& spec, const std::string& stage, int after) {
+  TensileJob full(spec, one_thread());
+  run(full);
+  const std::string want = state_bytes(full.system());
+
+  std::string bytes;
+  {
+    TensileJob first(spec, one_thread());
+    int seen = 0;
+    bool stop = false;
+    run(
+        first, [&] { return stop; },
+        [&](long) {
+          const Stage* st = first.current_stage();
+          if (!stop && st && st->name() == stage && first.stage_begun() && ++seen == after) {
+            bytes = save_checkpoint(first);
+            stop = true;
+          }
+        });
+    ASSERT_FALSE(bytes.empty()) << "no checkpoint inside " << stage;
+  }
+  TensileJob resumed(spec, one_thread());
+  load_checkpoint(resumed, bytes);
+  EXPECT_EQ(resumed.current_stage()->name(), stage);
+  run(resumed);
+  EXPECT_EQ(state_bytes(resumed.system()), want) << "resumed inside " << stage;
+  const Summary a = full.summary(), b = resumed.summary();
+  std::string ka, kb;
+  for (const auto& [k, v] : a) ka += k + " ";
+  for (const auto& [k, v] : b) kb += k + " ";
+  ASSERT_EQ(ka, kb);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].first, b[i].first);
+    EXPECT_EQ(a[i].second, b[i].second) << a[i].first;
+  }
+}
+
+TEST(TensileJob, CheckpointInsideEveryStageResumesBitIdentically) {
+  TensileJobSpec s = tiny_spec();
+  s.nanoparticles = 3;
+  expect_resume_identical(s, "prerelax", 2);
+  expect_resume_identical(s, "relax", 2);
+  expect_resume_identical(s, "tensile", 3);
+}
+
+TEST(TensileJob, SameSeedSameResultsOtherSeedOther) {
+  TensileJob a(tiny_spec(), one_thread()), b(tiny_spec(), one_thread());
+  run(a);
+  run(b);
+  EXPECT_EQ(state_bytes(a.system()), state_bytes(b.system()));
+  EXPECT_EQ(a.summary(), b.summary());
+  TensileJobSpec other = tiny_spec();
+  other.seed = 8;
+  TensileJob c(other, one_thread()), d(tiny_spec(), one_thread());
+  EXPECT_NE(state_bytes(c.system()), state_bytes(d.system()));
+}
+
+TEST(TensileJob, BadSpecsNameFieldAndRange) {
+  auto bad = [](const std::function<void(TensileJobSpec&)>& edit, const std::string& field) {
+    TensileJobSpec s = tiny_spec();
+    edit(s);
+    try {
+      s.validate();
+      ADD_FAILURE() << "accepted a bad " << field;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(TensileJob(s, one_thread()), std::invalid_argument) << field;
+  };
+  const double inf = INFINITY, nan = NAN;
+  bad([](TensileJobSpec& s) { s.nanoparticles = -1; }, "nanoparticles");
+  bad([](TensileJobSpec& s) { s.nanoparticles = 20000000; }, "nanoparticles");
+  bad([](TensileJobSpec& s) { s.film.side = -1; }, "side");
+  bad([&](TensileJobSpec& s) { s.film.side = nan; }, "side");
+  bad([](TensileJobSpec& s) { s.prerelax_damping = 1; }, "prerelax_damping");
+  bad([&](TensileJobSpec& s) { s.prerelax_damping = nan; }, "prerelax_damping");
+  bad([](TensileJobSpec& s) { s.prerelax.max_time = 0; }, "max_time");
+  bad([](TensileJobSpec& s) { s.relax_ps = -1; }, "relax_ps");
+  bad([&](TensileJobSpec& s) { s.relax_ps = inf; }, "relax_ps");
+  bad([](TensileJobSpec& s) { s.relax_ps = 1e9; }, "relax_ps");
+  bad([](TensileJobSpec& s) { s.dashpot_ratio = 2; }, "dashpot_ratio");
+  bad([](TensileJobSpec& s) { s.local_damping = -0.1; }, "local_damping");
+  bad([](TensileJobSpec& s) { s.grip_width = 0; }, "grip_width");
+  bad([](TensileJobSpec& s) { s.grip_width = 31; }, "grip_width");
+  bad([&](TensileJobSpec& s) { s.sample_every_ps = nan; }, "sample_every_ps");
+  bad([](TensileJobSpec& s) { s.relax_count_every_ps = 0; }, "relax_count_every_ps");
+  bad([](TensileJobSpec& s) { s.temperature_k = 300; }, "temperature_k");
+  bad([](TensileJobSpec& s) { s.monotonic.strain_rate = 0; }, "strain_rate");
+  bad([&](TensileJobSpec& s) { s.monotonic.target_strain = inf; }, "target_strain");
+  bad([](TensileJobSpec& s) { s.mode = TensileMode::Cyclic, s.cyclic.period = 100; }, "mean_rate");
+  bad([](TensileJobSpec& s) { s.relax_report_ps = {-1}; }, "relax_report_ps");
+  bad([](TensileJobSpec& s) { s.relax_report_ps.assign(1001, 1.0); }, "relax_report_ps");
+  bad([&](TensileJobSpec& s) { s.test_report_strains = {nan}; }, "test_report_strains");
+  EXPECT_THROW(np_deposit_from_name("later"), std::invalid_argument);
+  EXPECT_EQ(np_deposit_from_name("before_relax"), NpDeposit::BeforeRelax);
+  EXPECT_EQ(np_deposit_name(NpDeposit::AfterRelax), "after_relax");
+  // More NPs than can fit in the tiny film: an error naming the count placed, at construction.
+  TensileJobSpec s = tiny_spec();
+  s.nanoparticles = 100000;
+  s.np_deposit = NpDeposit::BeforeRelax;
+  EXPECT_THROW(TensileJob(s, one_thread()), std::invalid_argument);
+  // A caller's film without elements.
+  EXPECT_THROW(TensileJob(Elements{}, tiny_spec(), one_thread()), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace mdem
