@@ -258,7 +258,7 @@ void System::initialize() {
 
   dt_critical_ = compute_critical_dt();
   if (s.dt) {
-    if (*s.dt > max_safe_dt()) {
+    if (s.check_dt && *s.dt > max_safe_dt()) {
       std::ostringstream m;
       m << "time step dt = " << *s.dt << " ps is above the safe limit " << max_safe_dt()
         << " ps (safety " << s.safety << " x critical step " << dt_critical_

@@ -63,6 +63,9 @@ struct IntegratorSettings {
   // put in, energy dissipated or released), that stops the run. Velocity Verlet's bounded
   // fluctuation at the default step stays well below it; an instability grows past it fast.
   double guard_energy_tolerance = 0.5;
+  // Off: a fixed dt above safety × critical step is taken as given instead of refused (stability
+  // studies probe the limit; the run guard still stops what goes unstable). No spec field sets it.
+  bool check_dt = true;
 };
 
 class System {
