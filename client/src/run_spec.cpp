@@ -239,7 +239,7 @@ int run_spec_job(const SpecKind& kind, const SpecRunOptions& p, std::ostream& te
     } else {
       print_report(out, err, doc, sys.time());
       out << "\n";
-      print_loop_timing(out, timing, figures);
+      print_loop_timing(out, timing, figures, &sys.timers());
       if (log.enabled()) out << "\nlog: " << log.path().string() << "\n";
     }
     return outcome.state == v1::SUCCEEDED ? kOk : kJobFailed;

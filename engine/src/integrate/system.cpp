@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -22,6 +23,14 @@ std::string describe(const Elements& el, std::size_t i) {
 }
 
 bool is_free(DofMode m) { return m == DofMode::Free; }
+
+// Adds the wall time since `mark` to `seconds` and moves the mark to now.
+using Clock = std::chrono::steady_clock;
+inline void lap(Clock::time_point& mark, double& seconds) {
+  const Clock::time_point now = Clock::now();
+  seconds += std::chrono::duration<double>(now - mark).count();
+  mark = now;
+}
 
 // Free rotation of a rigid body with principal inertia I (body frame) over time h, by the
 // symmetric splitting of Dullweber, Leimkuhler and McLachlan: each step is an exact rotation
@@ -310,12 +319,16 @@ void System::refresh_booking_work() {
   update_energy_scale();
 }
 
-void System::compute_forces(bool with_local_damping) {
+void System::compute_forces(bool with_local_damping, StepTimers* timers) {
+  Clock::time_point mark;
+  if (timers) mark = Clock::now();
   pairs_.update(el_);
+  if (timers) lap(mark, timers->neighbor_s);
   sink_.clear();
   for (const auto& m : models_)
     if (inactive_.empty() || model_active(m.get())) m->compute(el_, pairs_.list_of(m.get()), sink_);
   ledger_.potential = sink_.reduce(el_.f, el_.t, fd_, td_);
+  if (timers) lap(mark, timers->pair_s);
 
   const double a = settings_.local_damping;
   if (a == 0) {
@@ -398,6 +411,8 @@ void System::run(long nsteps) {
   // arithmetic in the order of velocity Verlet: (1) first half kick and drift; (2) local damping,
   // second half kick and kinetic energy. The sums are per thread in a fixed order (ordered_sums).
   const double a_local = settings_.local_damping;
+  StepTimers& timers = timers_;
+  Clock::time_point mark = Clock::now();
   for (long step = 0; step < nsteps; ++step) {
     double work = 0, diss = 0;
     // 1. First half kick with the forces at t_n; book half of the work of external loads and
@@ -456,8 +471,11 @@ void System::run(long nsteps) {
 
     time_ += dt;
     ++steps_;
+    lap(mark, timers.integrate_s);
     for (auto& u : updaters_) u->apply(*this, time_);
-    compute_forces(false);
+    lap(mark, timers.updaters_s);
+    compute_forces(false, &timers);
+    mark = Clock::now();
 
     // 2. Local damping of the new forces, second half kick with the forces at t_{n+1}, the rest
     //    of the work and damping books, and the kinetic energy at t_{n+1}.
@@ -506,6 +524,7 @@ void System::run(long nsteps) {
     ledger_.kinetic_translational = kt;
     ledger_.kinetic_rotational = kr;
     if (steps_ % settings_.guard_every == 0) check_energy_growth();
+    lap(mark, timers.integrate_s);
   }
 }
 

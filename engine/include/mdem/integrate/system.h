@@ -14,6 +14,7 @@
 #include "mdem/core/elements.h"
 #include "mdem/core/energy.h"
 #include "mdem/force/force_model.h"
+#include "mdem/integrate/step_timers.h"
 #include "mdem/io/state_io.h"
 #include "mdem/neighbor/neighbor_list.h"
 #include "mdem/neighbor/pair_table.h"
@@ -143,6 +144,9 @@ class System {
   double max_safe_dt() const { return settings_.safety * dt_critical_; }
   int threads() const { return threads_; }
 
+  // Wall time of run()'s parts since the system was made (step_timers.h).
+  const StepTimers& timers() const { return timers_; }
+
   const EnergyLedger& energy() const { return ledger_; }
   // |W_ext − (ΔE + E_diss)| over the energy in play: the largest of the initial kinetic energy,
   // the work put in, the energy dissipated and the stored energy released.
@@ -184,8 +188,9 @@ class System {
 
  private:
   // Forces, energies and damping of the current state; with_local_damping false leaves the
-  // local damping to the caller's own pass over the elements (run()'s second half kick).
-  void compute_forces(bool with_local_damping = true);
+  // local damping to the caller's own pass over the elements (run()'s second half kick). With
+  // timers, the neighbour-list update and the force evaluation are timed into them.
+  void compute_forces(bool with_local_damping = true, StepTimers* timers = nullptr);
   void update_kinetic();
   void check_finite_forces() const;
   void check_energy_growth();
@@ -204,6 +209,7 @@ class System {
   std::vector<Vec3> f_prev_, t_prev_, fext_prev_, text_prev_;  // for work bookkeeping
   std::vector<std::array<double, 4>> partial_sums_;  // per thread, for sums in a fixed order
   EnergyLedger ledger_;
+  StepTimers timers_;
   double energy_scale_ = 0;  // energy in play, for relative errors
   double initial_kinetic_ = 0, initial_stored_ = 0;
   double time_ = 0, dt_ = 0, dt_critical_ = 0;
