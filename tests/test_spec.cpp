@@ -323,7 +323,8 @@ TEST(SpecValidate, SpecErrorWhatListsEveryErrorOnItsOwnLine) {
 }
 
 TEST(SpecValidate, MissingKindIsAnError) {
-  expect_one_error(json_errors("{}"), "kind", {"no job kind given (allowed: twist, compression)"});
+  expect_one_error(json_errors("{}"), "kind",
+                   {"no job kind given (allowed: twist, compression, tensile)"});
   expect_one_error(json_errors(R"({"name":"x", "run":{"threads":1}})"), "kind", {"twist"});
 }
 

@@ -142,7 +142,7 @@ class TempDir {
 double x_value(const PlotRequest& r, const SeriesFrame& f) {
   if (r.x == "time_ps") return f.time_ps;
   if (r.x == "step") return static_cast<double>(f.step);
-  return f.values[column_index(r.columns, r.x)];
+  return r.x_scale * f.values[column_index(r.columns, r.x)];
 }
 
 void write_data(const std::string& path, const PlotRequest& r,
@@ -240,7 +240,10 @@ std::string script_text(const PlotRequest& r, const std::string& data,
   s << "set termoption noenhanced\n"
     << "set output " << quoted(fs::absolute(r.out_path).string()) << "\n"
     << "set xlabel "
-    << quoted(r.x == "time_ps" || r.x == "step" ? axis_label({r.x}) : legend_of(r.x)) << "\n"
+    << quoted(!r.x_label.empty()                  ? r.x_label
+              : r.x == "time_ps" || r.x == "step" ? axis_label({r.x})
+                                                  : legend_of(r.x))
+    << "\n"
     << line_types() << "set grid\n";
   const char* style = frames.size() > 60 ? "with lines lw 1.8" : "with linespoints ps 0.6";
   if (!r.energy_overview) {

@@ -19,6 +19,8 @@ struct PlotRequest {
   std::vector<std::string> columns;   // every column of the job, in frame order
   std::vector<std::string> selected;  // the columns to draw (see select_columns)
   std::string x = "time_ps";          // horizontal axis: time_ps, step or a column
+  double x_scale = 1.0;               // x values drawn as x_scale times the column's
+  std::string x_label;                // the horizontal axis's label; "" = from x's name
   std::string out_path;               // .png or .svg
   // The default picture of a job (no --columns): the selected energies as changes from the first
   // frame, in panels by group (bond terms; van der Waals and contact; kinetic; work, dissipation

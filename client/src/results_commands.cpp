@@ -103,7 +103,7 @@ void print_plot_help(std::ostream& os) {
   os << "Usage: mdem plot ID [--out PATH] [--columns A,B,...] [--x COLUMN] [--db PATH]\n"
         "\n"
         "Draws a job's time series with gnuplot: by default the energy components (the columns\n"
-        "ending in _eV) against time_ps.\n"
+        "ending in _eV) against time_ps; a tensile job's stress (GPa) against strain (%).\n"
      << kIdHelp
      << "\n"
         "Flags:\n"
@@ -350,10 +350,25 @@ int run_plot(const std::vector<std::string>& args, std::ostream& out) {
   PlotRequest request;
   request.title = job.id + " (" + job.kind + ")";
   request.columns = store->columns(job.id);
-  request.selected =
-      select_columns(request.columns, given.count("--columns") ? given["--columns"] : "");
-  request.energy_overview = !given.count("--columns");
-  if (given.count("--x")) request.x = given["--x"];
+  // The kind's own picture (a tensile job's stress-strain curve), else the energy overview.
+  const JobKind* kind = job_kinds().find(job.kind);
+  if (!given.count("--columns") && kind && !kind->plot.columns.empty()) {
+    std::string wanted;
+    for (const std::string& c : kind->plot.columns) wanted += (wanted.empty() ? "" : ",") + c;
+    request.selected = select_columns(request.columns, wanted);
+    request.x = kind->plot.x;
+    request.x_scale = kind->plot.x_scale;
+    request.x_label = kind->plot.x_label;
+  } else {
+    request.selected =
+        select_columns(request.columns, given.count("--columns") ? given["--columns"] : "");
+    request.energy_overview = !given.count("--columns");
+  }
+  if (given.count("--x")) {
+    request.x = given["--x"];
+    request.x_scale = 1.0;
+    request.x_label.clear();
+  }
   check_x_column(request.columns, request.x);
   request.out_path = given.count("--out") ? given["--out"] : job.id + ".png";
   const std::vector<SeriesFrame> frames = store->frames(job.id);

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "compression_spec.h"
+#include "tensile_spec.h"
 #include "twist_spec.h"
 
 namespace mdem::cli {
@@ -56,7 +57,7 @@ void apply_common_flags(const FlagValues& f, v1::JobSpec& spec) {
 }
 
 const SpecKindRegistry& spec_kinds() {
-  static const SpecKindRegistry kinds = {twist_kind(), compression_kind()};
+  static const SpecKindRegistry kinds = {twist_kind(), compression_kind(), tensile_kind()};
   return kinds;
 }
 

@@ -9,7 +9,8 @@
 namespace mdem {
 
 const JobKindRegistry& job_kinds() {
-  static const JobKindRegistry kinds = {twist_job_kind(), compression_job_kind()};
+  static const JobKindRegistry kinds = {twist_job_kind(), compression_job_kind(),
+                                        tensile_job_kind()};
   return kinds;
 }
 

@@ -4,7 +4,7 @@
 namespace mdem::spec {
 
 const KindRulesRegistry& kind_rules() {
-  static const KindRulesRegistry kinds = {twist_rules(), compression_rules()};
+  static const KindRulesRegistry kinds = {twist_rules(), compression_rules(), tensile_rules()};
   return kinds;
 }
 

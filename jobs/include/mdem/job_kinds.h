@@ -33,6 +33,16 @@ struct SummaryField {
 };
 using SummaryLayout = std::vector<SummaryField>;
 
+// The picture `mdem plot ID` draws without --columns: `columns` against the column `x` scaled by
+// x_scale and labelled x_label (a tensile job: stress in GPa against strain in %). No columns:
+// the energy overview against time.
+struct DefaultPlot {
+  std::vector<std::string> columns;
+  std::string x = "time_ps";
+  double x_scale = 1.0;
+  std::string x_label;  // "" = from the column's name
+};
+
 struct JobKind {
   std::string name;  // as in the proto layer's registry ("twist")
   v1::JobSpec::KindCase kind_case;
@@ -45,14 +55,16 @@ struct JobKind {
   // Whether building the scene is quick (a lattice) rather than a simulation of its own.
   bool builds_quickly = true;
   SummaryLayout summary;
+  DefaultPlot plot;
 };
 
 using JobKindRegistry = KindRegistry<JobKind>;
 
-// The kinds this build runs: twist, compression.
+// The kinds this build runs: twist, compression, tensile.
 const JobKindRegistry& job_kinds();
 JobKind twist_job_kind();
 JobKind compression_job_kind();
+JobKind tensile_job_kind();
 
 // The layout of the kind named `kind` in job_kinds(), or nullptr for a kind that has none (the
 // `run bundle` demo, a report from a newer daemon).

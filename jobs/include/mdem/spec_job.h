@@ -9,6 +9,7 @@
 
 #include "mdem/job/compression_job.h"
 #include "mdem/job/job.h"
+#include "mdem/job/tensile_job.h"
 #include "mdem/job/twist_job.h"
 #include "mdem/job_kinds.h"
 #include "mdem/job_state.h"
@@ -16,11 +17,12 @@
 
 namespace mdem {
 
-// The twist and compression jobs' engine specs (internal units; in each kind's own
+// The twist, compression and tensile jobs' engine specs (internal units; in each kind's own
 // <kind>_job_kind.cpp), integrator settings (the kind's local damping) and output cadence of a
 // finalized spec.
 TwistJobSpec twist_job_spec(const v1::JobSpec& spec);
 CompressionJobSpec compression_job_spec(const v1::JobSpec& spec);
+TensileJobSpec tensile_job_spec(const v1::JobSpec& spec);
 IntegratorSettings integrator_settings(const v1::JobSpec& spec);
 JobCadence job_cadence(const v1::JobSpec& spec);
 

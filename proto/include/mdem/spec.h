@@ -86,4 +86,33 @@ inline constexpr double kMaxCompressionGrains = 2'000'000;
 // for unset fields; not rounded. NaN when a field is not finite.
 double compression_grain_estimate(const mdem::v1::CompressionSpec& c);
 
+// ---- tensile (mdem.v1.TensileSpec) ----
+
+// Table 5-1's film of a size: side (= width), tubes and segments per tube; every size is 11 nm
+// thick. FILM_SIZE_UNSPECIFIED (and a number that names no size) is the small film.
+struct FilmPreset {
+  double side_nm;
+  int tubes;
+  int segments_per_tube;
+};
+FilmPreset film_preset(mdem::v1::FilmSize size);
+
+// Most elements (segments and NPs) a tensile film may hold; validate refuses more.
+inline constexpr double kMaxTensileElements = 2'000'000;
+// The smallest NP–NP centre distance the film's NP placement accepts: 2 r_NP + the NP–NP law's
+// rest gap, 5.4287267 nm (tensile.md §1.2, §3.2).
+inline constexpr double kNpMinSpacingNm = 5.4287267;
+
+// The film's element count, tubes x segments_per_tube + nanoparticles, with the size's values
+// standing in for unset fields; not rounded. NaN when a field is not finite.
+double tensile_element_count(const mdem::v1::TensileSpec& t);
+// The most NPs that can fit a side x side x thickness film whatever its tubes: balls of diameter
+// kNpMinSpacingNm about the centres, in the slab widened by half of it on every side,
+// 6 (side + s)^2 (thickness + s) / (pi s^3) (the engine's placement refuses more at once).
+double tensile_np_capacity(double side_nm, double thickness_nm);
+// The loading time of the tensile spec's test in ps, its defaults standing in for unset fields:
+// monotonic, ramp/2 + target/rate (when the target lies past the ramp's 1/2 rate x ramp; else
+// the time on the ramp); cyclic, cycles x 2 amplitude / rate. NaN for a non-finite field.
+double tensile_loading_ps(const mdem::v1::TensileSpec& t);
+
 }  // namespace mdem::spec

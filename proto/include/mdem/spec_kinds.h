@@ -37,10 +37,11 @@ struct KindRules {
 
 using KindRulesRegistry = KindRegistry<KindRules>;
 
-// The kinds this build knows: twist, compression.
+// The kinds this build knows: twist, compression, tensile.
 const KindRulesRegistry& kind_rules();
 KindRules twist_rules();
 KindRules compression_rules();
+KindRules tensile_rules();
 
 // apply_defaults, validate and finalize over another registry (a test's own kinds).
 void apply_defaults(v1::JobSpec& spec, const KindRulesRegistry& kinds);

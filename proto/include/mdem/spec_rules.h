@@ -74,6 +74,24 @@ inline constexpr double kPeakPerOuterRadius = 0.4;
 inline constexpr bool kCompressionUnload = true;
 inline constexpr double kViscousRatio = 0.5;
 inline constexpr double kCompressionLocalDamping = 0.7;
+// tensile (tensile.md §0 and §6; the film's size, side and tube counts come from its Table 5-1
+// preset, tensile_preset())
+inline constexpr double kThicknessNm = 11.0;
+inline constexpr double kMaxTiltDeg = 2.0;
+inline constexpr int kNanoparticles = 0;
+inline constexpr double kPrerelaxMaxPs = 50.0;
+inline constexpr double kRelaxPs = 4500.0;
+inline constexpr double kTensileLocalDamping = 0.0;
+inline constexpr double kTargetStrainPercent = 20.0;
+inline constexpr double kStrainRatePerPs = 1e-4;          // 1e-7 /fs
+inline constexpr double kCyclicStrainRatePerPs = 5.7e-5;  // Table 5-5: 5.7e-8 /fs
+inline constexpr double kRampPs = 600.0;
+inline constexpr int kCycles = 6;
+inline constexpr double kAmplitudePercent = 1.0;
+inline constexpr double kGripWidthNm = 15.0;
+inline constexpr bool kZeroVelocities = false;
+inline constexpr double kReportStrainsPercent[] = {0.0, 2.0, 10.0, 20.0};
+inline constexpr double kReportTimesPs[] = {0.0, 1000.0, 2000.0, 3000.0, 4000.0, 4500.0};
 }  // namespace defaults
 
 namespace ranges {
@@ -106,6 +124,22 @@ inline constexpr Range kStrengthGpa = above(0.0, 100.0, "GPa");
 inline constexpr Range kPlatenSpeed = above(0.0, 1.0, "nm/ps");
 inline constexpr Range kPeakDisplacementNm = above(0.0, 2000.0, "nm");
 inline constexpr Range kViscousRatio = closed(0.0, limits::kMaxDashpotRatio, "");
+// tensile
+inline constexpr Range kSideNm = above(0.0, 2000.0, "nm");
+inline constexpr Range kThicknessNm = above(0.0, 100.0, "nm");
+inline constexpr Range kTubes = closed(1, 100000, "tubes");
+inline constexpr Range kSegmentsPerTube = closed(1, 100000, "segments");
+inline constexpr Range kMaxTiltDeg = closed(0.0, 90.0, "degrees");
+inline constexpr Range kNanoparticles = closed(0, 10000000, "NPs");
+inline constexpr Range kPrerelaxMaxPs = above(0.0, 10000.0, "ps");
+inline constexpr Range kRelaxPs = closed(0.0, 1e6, "ps", "0 = ready-to-relax");
+inline constexpr Range kTargetStrainPercent = above(0.0, 300.0, "%");
+inline constexpr Range kStrainRatePerPs = {0.0, 0.01, true, false, "/ps", "1e-4 /ps = 1e-7 /fs"};
+inline constexpr Range kRampPs = above(0.0, 100000.0, "ps");
+inline constexpr Range kCycles = closed(1, 1000, "cycles");
+inline constexpr Range kAmplitudePercent = above(0.0, 50.0, "%");
+inline constexpr Range kGripWidthNm = above(0.0, 500.0, "nm");
+inline constexpr std::size_t kMaxReportPoints = 100;
 inline constexpr std::size_t kNameMaxChars = 200;
 }  // namespace ranges
 

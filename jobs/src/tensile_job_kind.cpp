@@ -1,0 +1,139 @@
+// The tensile kind in the jobs layer: TensileSpec -> TensileJob (percent -> fractions, the film's
+// preset and numbers), its element bound and its summary.
+#include <climits>
+#include <cmath>
+
+#include "mdem/job/tensile_job.h"
+#include "mdem/job_kinds.h"
+#include "mdem/spec.h"
+#include "mdem/spec_job.h"
+
+namespace mdem {
+
+namespace {
+
+FilmSize film_size(v1::FilmSize s) {
+  switch (s) {
+    case v1::FILM_MEDIUM:
+      return FilmSize::Medium;
+    case v1::FILM_LARGE:
+      return FilmSize::Large;
+    default:
+      return FilmSize::Small;
+  }
+}
+
+}  // namespace
+
+TensileJobSpec tensile_job_spec(const v1::JobSpec& spec) {
+  const v1::TensileSpec& t = spec.tensile();
+  TensileJobSpec job;
+  // The size's Table 5-1 film, with the spec's numbers (finalize filled them from the size).
+  job.film = TensileFilmSpec::of_size(film_size(t.size()));
+  job.film.side = t.side_nm();
+  job.film.thickness = t.thickness_nm();
+  job.film.tubes = t.tubes();
+  job.film.segments_per_tube = t.segments_per_tube();
+  job.film.max_out_of_plane_deg = t.max_tilt_deg();
+  job.film.seed = spec.seed();
+  job.film.nanoparticles = t.nanoparticles();
+  job.nanoparticles = t.nanoparticles();
+  job.np_deposit =
+      t.np_deposit() == v1::BEFORE_RELAX ? NpDeposit::BeforeRelax : NpDeposit::AfterRelax;
+  job.seed = spec.seed();
+  job.prerelax.max_time = t.prerelax_max_ps();
+  job.relax_ps = t.relax_ps();
+  job.dashpot_ratio = t.vdw_damping_ratio();
+  job.local_damping = t.local_damping();
+  job.mode = t.mode() == v1::CYCLIC ? TensileMode::Cyclic : TensileMode::Monotonic;
+  // Strains are percent in the spec, fractions in the engine; rates 1/ps in both.
+  job.monotonic.strain_rate = t.strain_rate_per_ps();
+  job.monotonic.ramp_time = t.ramp_ps();
+  job.monotonic.target_strain = t.target_strain_percent() / 100.0;
+  job.cyclic.amplitude = t.amplitude_percent() / 100.0;
+  job.cyclic.mean_rate = t.strain_rate_per_ps();
+  job.cyclic.period = 0;  // from the mean rate: P = 2 amplitude / rate
+  job.cyclic.cycles = t.cycles();
+  job.grip_width = t.grip_width_nm();
+  job.zero_velocities_at_test = t.zero_velocities();
+  job.relax_report_ps.assign(t.report_times_ps().begin(), t.report_times_ps().end());
+  job.test_report_strains.clear();
+  for (double p : t.report_strains_percent()) job.test_report_strains.push_back(p / 100.0);
+  return job;
+}
+
+JobKind tensile_job_kind() {
+  JobKind k;
+  k.name = "tensile";
+  k.kind_case = v1::JobSpec::kTensile;
+  k.build = [](const v1::JobSpec& spec, const IntegratorSettings& s) -> std::unique_ptr<Job> {
+    return std::make_unique<TensileJob>(tensile_job_spec(spec), s);
+  };
+  k.local_damping = [](const v1::JobSpec& spec) { return spec.tensile().local_damping(); };
+  // Every segment of the generated tubes and every NP: the count is exact.
+  k.element_bound = [](const v1::JobSpec& spec) {
+    const double n = spec::tensile_element_count(spec.tensile());
+    if (!(n < 1e15)) return LONG_MAX;  // also NaN
+    return static_cast<long>(std::ceil(n));
+  };
+  // The film itself is generated at once, but the pre-relaxation is a simulation of its own (a
+  // stage, up to its cap), and a large film with NPs takes a second and hundreds of MB to build:
+  // the daemon leaves it to the worker, as compression's packing.
+  k.builds_quickly = false;
+  // The keys TensileJob::summary() emits (engine/src/job/tensile_job.cpp). Strains, fractions
+  // and shrinkage are fractions (0.02 = 2 %), as the engine reports them. Keys a run does not
+  // reach (no frame in the 1-2 % window, no yield, a cyclic test's per-cycle cycle_k_* values)
+  // are left out of the summary or follow the declared ones under their own names.
+  using T = SummaryField::Type;
+  k.summary = {
+      {"segments", T::Count, "", "segments", 1, 6, true},
+      {"nanoparticles", T::Count, "", "NPs", 1, 6, true},
+      {"tubes", T::Count, "", "tubes", 1, 6, false},
+      {"pieces", T::Count, "", "pieces", 1, 6, false},
+      {"density_g_cm3", T::Real, "g/cm³", "density", 1, 4, false},
+      {"porosity", T::Real, "", "porosity", 1, 4, false},
+      {"np_deposit", T::Label, "", "NPs deposited", 2, 6, false},
+      {"np_candidates", T::Count, "", "NP candidates", 2, 6, false},
+      {"prerelax_reason", T::Label, "", "pre-relaxation:", 3, 6, false},
+      {"prerelax_ps", T::Real, "ps", "after", 3, 6, false},
+      {"prerelax_steps", T::Count, "", "steps", 3, 6, false},
+      {"np_prerelax_reason", T::Label, "", "after the NPs:", 4, 6, false},
+      {"np_prerelax_ps", T::Real, "ps", "after", 4, 6, false},
+      {"relax_ps", T::Real, "ps", "relaxation", 5, 6, false},
+      {"relax_stabilisation_ps", T::Real, "ps", "stabilised after", 5, 6, false, true},
+      {"relax_bending_share_end", T::Real, "", "bending share", 5, 4, false},
+      {"relax_aligned_registry_free_start", T::Count, "", "aligned pairs (registry-free) from", 6,
+       6, false},
+      {"relax_aligned_registry_free_end", T::Count, "", "to", 6, 6, false},
+      {"relax_aligned_thesis_start", T::Count, "", "thesis count from", 6, 6, false},
+      {"relax_aligned_thesis_end", T::Count, "", "to", 6, 6, false},
+      {"relax_pores_gt200nm2_start", T::Count, "", "pores > 200 nm² from", 6, 6, false},
+      {"relax_pores_gt200nm2_end", T::Count, "", "to", 6, 6, false},
+      {"youngs_modulus_GPa", T::Real, "GPa", "Young's modulus", 7, 6, true, true},
+      {"modulus_intercept_GPa", T::Real, "GPa", "intercept", 7, 6, false},
+      {"yield_strain", T::Real, "", "yield strain", 7, 6, false, true},
+      {"peak_stress_GPa", T::Real, "GPa", "peak stress", 7, 6, true, true},
+      {"final_strain", T::Real, "", "final strain", 7, 6, false},
+      {"tubes_in_tension_at_2pct", T::Real, "", "tubes in tension at 2 %", 8, 4, false, true},
+      {"parents_in_tension_at_2pct", T::Real, "", "parent tubes", 8, 4, false},
+      {"mid_width_shrinkage_end", T::Real, "", "width shrinkage at the end", 8, 4, false, true},
+      {"aligned_registry_free_test_start", T::Count, "", "test: aligned pairs (registry-free) from",
+       9, 6, false},
+      {"aligned_registry_free_test_end", T::Count, "", "to", 9, 6, false},
+      {"aligned_thesis_test_start", T::Count, "", "thesis count from", 9, 6, false},
+      {"aligned_thesis_test_end", T::Count, "", "to", 9, 6, false},
+      {"pores_gt200nm2_test_start", T::Count, "", "pores > 200 nm² from", 9, 6, false},
+      {"pores_gt200nm2_test_last_report", T::Count, "", "to", 9, 6, false},
+      {"toughness_GJ_m3", T::Real, "GJ/m³", "toughness", 10, 6, false, true},
+      {"failure_strain", T::Real, "", "failure strain", 10, 6, false, true},
+      {"cycles_complete", T::Count, "", "cycles complete", 11, 6, false},
+      {"energy_balance_error", T::Real, "", "energy balance error", 12, 6, false},
+      {"dt_ps", T::Real, "ps", "dt", 12, 6, false},
+      {"simulated_ps", T::Real, "ps", "simulated", 12, 6, false},
+  };
+  // The stress-strain curve: the engine's strain column is a fraction, drawn in percent.
+  k.plot = {{"stress_GPa"}, "strain", 100.0, "strain (%)"};
+  return k;
+}
+
+}  // namespace mdem
