@@ -40,15 +40,19 @@ inline fs::path fresh_dir(const std::string& name) {
   return d;
 }
 
+// Writes a file only its owner may read (mdemd refuses a token file others may read).
+inline void write_private(const fs::path& path, const std::string& text) {
+  std::ofstream(path) << text;
+  fs::permissions(path, fs::perms::owner_read | fs::perms::owner_write);
+}
+
 class DaemonProcess {
  public:
   // dir: the test's directory (data/, tokens, log inside). extra: more mdemd flags.
   explicit DaemonProcess(fs::path dir, std::vector<std::string> extra = {})
       : dir_(std::move(dir)), extra_(std::move(extra)) {
-    std::ofstream(dir_ / "tokens") << "# test users\n"
-                                   << kAliceToken << " alice\n"
-                                   << kBobToken << " bob\n"
-                                   << kRootToken << " root admin\n";
+    write_private(dir_ / "tokens", std::string("# test users\n") + kAliceToken + " alice\n" +
+                                       kBobToken + " bob\n" + kRootToken + " root admin\n");
     start();
   }
   ~DaemonProcess() {

@@ -354,7 +354,7 @@ TEST(Server, CorruptCheckpointFailsThatJobOnly) {
 
 TEST(Server, UnusableDataDirectoryOrTokenFileRefusesToStart) {
   const fs::path dir = fresh_dir("baddata");
-  std::ofstream(dir / "tokens") << kAliceToken << " alice\n";
+  write_private(dir / "tokens", std::string(kAliceToken) + " alice\n");
   std::ofstream(dir / "a-file") << "x";
   auto start = [&](std::vector<std::string> args) {
     args.insert(args.begin(), MDEMD_PATH);
@@ -378,11 +378,29 @@ TEST(Server, UnusableDataDirectoryOrTokenFileRefusesToStart) {
                    (dir / "missing-tokens").string()}),
             2);
   EXPECT_NE(log().find("token file"), std::string::npos);
-  std::ofstream(dir / "bad-tokens") << "short bob\n";
+  write_private(dir / "bad-tokens", "short bob\n");
   EXPECT_EQ(start({"--listen", "127.0.0.1:0", "--data-dir", (dir / "d").string(), "--token-file",
                    (dir / "bad-tokens").string()}),
             2);
   EXPECT_NE(log().find("line 1"), std::string::npos);
+  EXPECT_EQ(start({"--data-dir", (dir / "d").string()}), 2);
+  EXPECT_NE(log().find("--token-file"), std::string::npos);
+  // A token file others may read (or the group write) is refused, naming the file, its mode and
+  // the fix (a private one is accepted: every DaemonProcess starts with one, see daemon.h).
+  for (const auto mode : {fs::perms::others_read, fs::perms::group_read, fs::perms::group_write}) {
+    write_private(dir / "open-tokens", std::string(kAliceToken) + " alice\n");
+    fs::permissions(dir / "open-tokens", mode, fs::perm_options::add);
+    EXPECT_EQ(start({"--listen", "127.0.0.1:0", "--data-dir", (dir / "d").string(), "--token-file",
+                     (dir / "open-tokens").string()}),
+              2);
+    const std::string text = log();
+    EXPECT_NE(text.find((dir / "open-tokens").string()), std::string::npos) << text;
+    EXPECT_NE(text.find("chmod 600"), std::string::npos) << text;
+    const char* expected = mode == fs::perms::others_read  ? "mode 0604"
+                           : mode == fs::perms::group_read ? "mode 0640"
+                                                           : "mode 0620";
+    EXPECT_NE(text.find(expected), std::string::npos) << text;
+  }
   EXPECT_EQ(start({"--data-dir", (dir / "d").string()}), 2);
   EXPECT_NE(log().find("--token-file"), std::string::npos);
   EXPECT_EQ(start({"--data-dir", (dir / "d").string(), "--token-file", (dir / "tokens").string(),

@@ -340,7 +340,7 @@ TEST(ServerFaults, ConfigFileRefusesDuplicateKeys) {
 
 TEST(ServerFaults, BadTlsCertificateOrKeyIsNamed) {
   const fs::path dir = fresh_dir("bad-tls");
-  std::ofstream(dir / "tokens") << kAliceToken << " alice\n";
+  write_private(dir / "tokens", std::string(kAliceToken) + " alice\n");
   const std::string mk = "openssl req -x509 -newkey rsa:2048 -nodes -days 1 -subj /CN=localhost ";
   ASSERT_EQ(std::system((mk + "-keyout " + (dir / "key.pem").string() + " -out " +
                          (dir / "cert.pem").string() + " >/dev/null 2>&1")

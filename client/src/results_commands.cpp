@@ -48,7 +48,7 @@ void print_ls_help(std::ostream& os) {
         "a job failed). Jobs submitted to a daemon are there too, with what `mdem watch` stored.\n"
         "\n"
         "Flags:\n"
-        "  --json          print a JSON array of the jobs (spec and summary as JSON)\n"
+        "  --json          print a JSON array of the jobs (spec and final report as JSON)\n"
      << kDbFlagHelp << "  --local         the local database even with $MDEM_SERVER set\n\n"
      << kRemoteHelp
      << "  --all           every user's jobs (an admin's token only) with a USER column\n"
@@ -62,7 +62,7 @@ void print_show_help(std::ostream& os) {
         "       mdem show ID --server HOST:PORT [--json] [connection flags]\n"
         "\n"
         "Prints one job: kind, state (and why it failed), creation and finish times, the numbers\n"
-        "of frames (with the series' columns) and snapshots, and the spec and summary JSON.\n"
+        "of frames (with the series' columns) and snapshots, and the spec and report JSON.\n"
      << kIdHelp
      << "\n"
         "Flags:\n"
@@ -190,7 +190,9 @@ json job_json(const JobRecord& job) {
     j["state_may_be_outdated"] = may_be_outdated(job);
   }
   j["spec"] = parse_or_text(job.spec_json);
-  j["summary"] = parse_or_text(job.summary_json);
+  // The job's final report (its summary, accuracy, performance), under the key `mdem show
+  // --server` uses: no summary.summary.
+  j["report"] = parse_or_text(job.summary_json);
   return j;
 }
 
@@ -288,7 +290,7 @@ void print_job(std::ostream& os, const JobRecord& job, const std::vector<std::st
   rows.push_back({"snapshots:", std::to_string(snapshots)});
   print_table(os, rows);
   print_document(os, "spec", job.spec_json);
-  print_document(os, "summary", job.summary_json);
+  print_document(os, "report", job.summary_json);
 }
 
 int run_show(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {

@@ -168,7 +168,8 @@ const char* daemon_usage() {
          "  --config FILE            YAML file with any of the keys below\n"
          "  --listen HOST:PORT       address to serve (default 127.0.0.1:50051; port 0 = any)\n"
          "  --data-dir DIR           job database and checkpoints (required)\n"
-         "  --token-file FILE        lines '<token> <user> [admin]' (required)\n"
+         "  --token-file FILE        lines '<token> <user> [admin]' (required; mode 600: a file\n"
+         "                           group or others may read is refused)\n"
          "  --port-file FILE         write the bound port here once serving\n"
          "  --tls-cert FILE --tls-key FILE   serve TLS with this PEM certificate and key\n"
          "  --workers N              jobs run at once, 1..256 (default 1)\n"
@@ -183,6 +184,8 @@ const char* daemon_usage() {
          "  --keepalive-time S       HTTP/2 keepalive ping interval (default 30)\n"
          "  --log-level L            trace, debug, info, warn, error (default info)\n"
          "  --log-json true|false    one JSON object per log line (default false)\n"
+         "  --version                print the version\n"
+         "  -h, --help               show this help\n"
          "\n"
          "Signals: SIGTERM or SIGINT drains: running jobs checkpoint and go back to the queue,\n"
          "then the daemon exits 0. Exit codes: 0 clean stop, 2 bad settings, 1 runtime failure.\n";

@@ -8,14 +8,23 @@
 
 #include "daemon.h"
 
+#ifndef MDEM_VERSION
+#define MDEM_VERSION "unknown"
+#endif
+
 int main(int argc, char** argv) {
   using namespace mdem::server;
   std::vector<std::string> args(argv + 1, argv + argc);
-  for (const std::string& a : args)
+  for (const std::string& a : args) {
     if (a == "--help" || a == "-h") {
       std::cout << daemon_usage();
       return 0;
     }
+    if (a == "--version") {
+      std::cout << "mdemd " MDEM_VERSION "\n";
+      return 0;
+    }
+  }
   DaemonConfig config;
   try {
     config = parse_daemon_config(args);

@@ -3,7 +3,9 @@
 //   <token> <user> [admin]
 // with '#' comments and blank lines allowed. Tokens are at least 16 characters of printable
 // ASCII without spaces; users are [A-Za-z0-9._-]{1,64}. A malformed file is refused whole, naming
-// the line, so a typo never silently locks a user out or lets one in.
+// the line, so a typo never silently locks a user out or lets one in. A file that group or others
+// may read or write (any of mode 077) is refused, naming its mode and `chmod 600`, as ssh refuses
+// a private key: whoever reads it can act as any user in it.
 #include <map>
 #include <optional>
 #include <stdexcept>
