@@ -26,6 +26,7 @@ TEST(CliRun, SmallBundleSucceedsWithABalancedEnergyReport) {
   const Result r = run({"bundle", "--segments", "6", "--steps", "400", "--threads", "1", "--json"});
   ASSERT_EQ(r.code, mdem::cli::kOk) << r.err;
   const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["kind"], "bundle");  // the key every report uses
   EXPECT_EQ(j["state"], "SUCCEEDED");
   EXPECT_EQ(j["summary"]["elements"], 42);
   EXPECT_EQ(j["performance"]["steps"], 400);

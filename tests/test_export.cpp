@@ -393,7 +393,8 @@ TEST_F(ExportTest, LsListsJobsNewestFirstWithHighlights) {
   const json jobs = json::parse(r.out);
   ASSERT_EQ(jobs.size(), 2u);
   EXPECT_EQ(jobs[0]["job_id"], kOtherJob);
-  EXPECT_EQ(jobs[1]["summary"]["summary"]["morphology"], "helical");
+  EXPECT_EQ(jobs[1]["report"]["summary"]["morphology"], "helical");
+  EXPECT_FALSE(jobs[1].contains("summary"));  // one report, no summary.summary
   EXPECT_EQ(jobs[1]["spec"]["tubes"], 3);
 
   r = call(mdem::cli::ls, {"--db", file("empty.db"), "--json"});

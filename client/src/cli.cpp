@@ -6,12 +6,17 @@
 #include <string>
 #include <vector>
 
+#include "mdem/suggest.h"
+
 #ifndef MDEM_VERSION
 #define MDEM_VERSION "unknown"
 #endif
 
 namespace mdem::cli {
 namespace {
+
+const std::vector<std::string> kCommands = {"run",  "submit", "watch", "cancel", "ls",
+                                            "show", "export", "plot",  "probe",  "help"};
 
 void print_usage(std::ostream& os) {
   os << "mdem " MDEM_VERSION
@@ -76,7 +81,8 @@ int dispatch(const std::vector<std::string>& argv_tail, std::ostream& out, std::
     return kOk;
   }
   if (cmd == "help") {
-    if (rest.empty()) {
+    if (rest.empty() || rest.front() == "--help" || rest.front() == "-h" ||
+        rest.front() == "help") {
       print_usage(out);
       return kOk;
     }
@@ -90,7 +96,8 @@ int dispatch(const std::vector<std::string>& argv_tail, std::ostream& out, std::
     if (rest.front() == "show") return show({"--help"}, out, err);
     if (rest.front() == "export") return export_job({"--help"}, out, err);
     if (rest.front() == "plot") return plot({"--help"}, out, err);
-    err << "mdem help: unknown command '" << rest.front() << "'\n\n";
+    err << "mdem help: unknown command '" << rest.front() << "'"
+        << did_you_mean(rest.front(), kCommands) << "\n\n";
     print_usage(err);
     return kUsage;
   }
@@ -99,9 +106,10 @@ int dispatch(const std::vector<std::string>& argv_tail, std::ostream& out, std::
     return kOk;
   }
   if (!cmd.empty() && cmd.front() == '-')
-    err << "mdem: unknown flag '" << cmd << "'\n\n";
+    err << "mdem: unknown flag '" << cmd << "'" << did_you_mean(cmd, {"--help", "--version"})
+        << "\n\n";
   else
-    err << "mdem: unknown command '" << cmd << "'\n\n";
+    err << "mdem: unknown command '" << cmd << "'" << did_you_mean(cmd, kCommands) << "\n\n";
   print_usage(err);
   return kUsage;
 }

@@ -7,6 +7,8 @@
 #include <sstream>
 #include <system_error>
 
+#include "mdem/suggest.h"
+
 namespace mdem::cli {
 
 namespace {
@@ -25,6 +27,15 @@ std::string allowed_list(const FlagSpec& spec) {
   return out + (out.empty() ? "" : ", ") + "--help";
 }
 
+// "unknown flag 'NAME'; did you mean --X? (allowed: ...)".
+std::string unknown_flag(const std::string& name, const FlagSpec& spec) {
+  std::vector<std::string> names = spec.with_value;
+  names.insert(names.end(), spec.switches.begin(), spec.switches.end());
+  names.push_back("--help");
+  return "unknown flag '" + name + "'" + did_you_mean(name, names) +
+         " (allowed: " + allowed_list(spec) + ")";
+}
+
 bool contains(const std::vector<std::string>& v, const std::string& s) {
   return std::find(v.begin(), v.end(), s) != v.end();
 }
@@ -37,15 +48,13 @@ std::map<std::string, std::string> parse_flags(const std::vector<std::string>& a
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
     if (a.rfind("--", 0) != 0) {
-      if (!a.empty() && a.front() == '-')
-        throw UsageError("unknown flag '" + a + "' (allowed: " + allowed_list(spec) + ")");
+      if (!a.empty() && a.front() == '-') throw UsageError(unknown_flag(a, spec));
       throw UsageError("unexpected argument '" + a + "' (allowed: " + allowed_list(spec) + ")");
     }
     const std::size_t eq = a.find('=');
     const std::string name = a.substr(0, eq);
     const bool is_switch = contains(spec.switches, name);
-    if (!is_switch && !contains(spec.with_value, name))
-      throw UsageError("unknown flag '" + name + "' (allowed: " + allowed_list(spec) + ")");
+    if (!is_switch && !contains(spec.with_value, name)) throw UsageError(unknown_flag(name, spec));
     if (given.count(name)) throw UsageError(name + ": given more than once");
     if (is_switch) {
       if (eq != std::string::npos) throw UsageError(name + ": takes no value");

@@ -14,15 +14,45 @@
 #include "mdem/job/bundle_job.h"
 #include "mdem/job_state.h"
 #include "mdem/spec_job.h"
+#include "mdem/suggest.h"
+#include "spec_flags.h"
 
 namespace mdem::cli {
 namespace {
 
+constexpr const char* kBundleAbout =
+    "A bundle of parallel CNTs without damping from random velocities: the engine's energy-"
+    "conservation check";
+
+// The first clause of a kind's description (up to its first ':' or '.'), on one line.
+std::string first_clause(const std::string& about) {
+  std::string text;
+  for (const char c : about) {
+    if (c == ':' || (c == '.' && (text.empty() || text.back() != 'h'))) break;  // "Ch. 4"
+    text += c == '\n' ? ' ' : c;
+  }
+  return text;
+}
+
+// `mdem run --help`: the job kinds, one line each.
+void print_kinds_help(std::ostream& os) {
+  os << "Usage: mdem run KIND [--spec FILE] [flags]\n"
+        "\n"
+        "Runs a job in this process and stores its results in the local results database\n"
+        "(`mdem submit KIND` queues the same job on an mdemd daemon).\n"
+        "\n"
+        "Job kinds (`mdem run KIND --help`: the flags of one):\n";
+  std::vector<std::vector<std::string>> rows;
+  for (const SpecKind& k : spec_kinds().all())
+    rows.push_back({"  " + k.name, first_clause(k.about)});
+  rows.push_back({"  bundle", kBundleAbout});
+  print_table(os, rows);
+  os << "\nExit codes: 0 success, 1 the job failed (e.g. numerical instability) or was\n"
+        "interrupted, 2 usage error.\n";
+}
+
 void print_run_help(std::ostream& os) {
-  os << "Usage: mdem run twist [flags]         (a twisted CNT rope: `mdem run twist --help`)\n"
-        "       mdem run compression [flags]   (a particle crushed between platens:\n"
-        "                                       `mdem run compression --help`)\n"
-        "       mdem run bundle [flags]\n"
+  os << "Usage: mdem run bundle [flags]\n"
         "\n"
         "Runs a bundle of parallel (10,10) CNTs (bonds + anisotropic vdW, no damping) from seeded\n"
         "random velocities and spins, and reports the energy balance: without damping or loads,\n"
@@ -131,7 +161,7 @@ int run_bundle(const RunOptions& o, std::ostream& out, std::ostream& err) {
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   json doc;
-  doc["job"] = "bundle";
+  doc["kind"] = "bundle";
   doc["state"] = job_state_name(failure.empty() ? v1::SUCCEEDED
                                 : cancelled     ? v1::CANCELLED
                                                 : v1::FAILED);
@@ -190,15 +220,17 @@ int guarded_run(const std::string& command, const std::function<int()>& body, st
 
 int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   if (args.empty() || args.front() == "--help" || args.front() == "-h") {
-    print_run_help(args.empty() ? err : out);
+    print_kinds_help(args.empty() ? err : out);
     return args.empty() ? kUsage : kOk;
   }
   const std::string kind = args.front();
   const std::vector<std::string> rest(args.begin() + 1, args.end());
   if (const SpecKind* k = find_spec_kind(kind)) return run_spec_kind(*k, rest, out, err);
   if (kind != "bundle") {
-    err << "mdem run: unknown job kind '" << kind << "' (allowed: " << spec_kind_names()
-        << ", bundle)\n";
+    std::vector<std::string> kinds = {"bundle"};
+    for (const SpecKind& k : spec_kinds().all()) kinds.push_back(k.name);
+    err << "mdem run: unknown job kind '" << kind << "'" << did_you_mean(kind, kinds)
+        << " (allowed: " << spec_kind_names() << ", bundle)\n";
     return kUsage;
   }
   if (wants_help(rest)) {

@@ -15,6 +15,7 @@
 
 #include "input.h"
 #include "mdem/spec.h"
+#include "mdem/suggest.h"
 
 namespace mdem::spec::detail {
 
@@ -51,6 +52,12 @@ class TrackedChars {
   const char* at_;
   const char** read_;
 };
+
+std::vector<std::string> field_list(const Descriptor& message) {
+  std::vector<std::string> names;
+  for (int i = 0; i < message.field_count(); ++i) names.push_back(message.field(i)->name());
+  return names;
+}
 
 std::string field_names(const Descriptor& message) {
   std::string names;
@@ -331,7 +338,8 @@ class SchemaCheck : public nlohmann::json_sax<nlohmann::json> {
     slot.offset = offset;
     slot.field = field_named(*top.message, k);
     if (slot.field == nullptr)
-      return fail(slot, "unknown field \"" + k + "\" (allowed: " + field_names(*top.message) + ")");
+      return fail(slot, "unknown field \"" + k + "\"" + did_you_mean(k, field_list(*top.message)) +
+                            " (allowed: " + field_names(*top.message) + ")");
     const auto first = top.seen.find(slot.field->number());
     if (first != top.seen.end()) {
       const std::string as = first->second.key == k ? "" : " as \"" + first->second.key + "\"";
