@@ -126,6 +126,14 @@ void BM_FilmSteps(benchmark::State& state) { run_steps(state, relaxed_film(), fi
 // 40 steps: several neighbour-list rebuilds per measurement.
 BENCHMARK(BM_FilmSteps)->Apply(one_and_two_threads)->Iterations(4);
 
+// The step's time split by phase (System::timers()), in ms per step, over the timed steps.
+void add_phase_counters(benchmark::State& state, const StepTimers& before, const StepTimers& after,
+                        double steps) {
+  state.counters["pair_ms"] = (after.pair_s - before.pair_s) / steps * 1e3;
+  state.counters["neighbor_ms"] = (after.neighbor_s - before.neighbor_s) / steps * 1e3;
+  state.counters["integrate_ms"] = (after.integrate_s - before.integrate_s) / steps * 1e3;
+}
+
 // Issue 13's films, the peer code's (waLBerla mesa_pd) CNT film set-up reproduced with our
 // generator: 396 tubes × 148 segments = 58 608 segments, relaxed 500 steps at dt 20 fs under
 // local damping 0.2 (no dashpots).
@@ -187,11 +195,13 @@ void issue13_steps(benchmark::State& state, bool dense) {
   System sys = issue13_system(el, dense, static_cast<int>(state.range(0)));
   sys.run(10);  // warm-up
   const long steps0 = sys.steps();
+  const StepTimers t0 = sys.timers();
   for (auto _ : state) sys.run(10);
   const double steps = static_cast<double>(sys.steps() - steps0);
   const double n = static_cast<double>(el.size());
   state.counters["element_steps_per_s"] =
       benchmark::Counter(n * steps, benchmark::Counter::kIsRate);
+  add_phase_counters(state, t0, sys.timers(), steps);
   state.counters["elements"] = n;
   state.counters["dt_fs"] = sys.dt() * 1e3;
   state.counters["pairs_per_element"] = static_cast<double>(sys.neighbors()->pair_count()) / n;

@@ -76,7 +76,7 @@ class NeighborList {
   std::vector<std::uint32_t> cell_elem_;   //   cell_elem_[cell_start_[c] .. cell_start_[c+1])
   std::vector<Vec3> cell_x_;               // positions in cell order (cache-friendly scan)
   std::vector<std::vector<std::uint32_t>> thread_neighbors_;  // per-thread output
-  std::vector<std::size_t> thread_counts_;                    // entries used in each
+  std::vector<std::size_t> chunk_pos_;  // where each chunk of elements starts in its thread's
 };
 
 }  // namespace mdem
