@@ -7,6 +7,7 @@
 #include <omp.h>
 
 #include <cstdio>
+#include <map>
 #include <memory>
 
 #include "mdem/core/units.h"
@@ -14,9 +15,11 @@
 #include "mdem/force/contact/anisotropic_vdw.h"
 #include "mdem/force/damping/viscous_contact_damping.h"
 #include "mdem/integrate/system.h"
+#include "mdem/job/tensile_job.h"
 #include "mdem/job/twist_job.h"
 #include "mdem/neighbor/neighbor_list.h"
 #include "mdem/scene/film_builder.h"
+#include "mdem/scene/tensile_film.h"
 
 using namespace mdem;
 
@@ -134,6 +137,31 @@ void add_phase_counters(benchmark::State& state, const StepTimers& before, const
   state.counters["integrate_ms"] = (after.integrate_s - before.integrate_s) / steps * 1e3;
 }
 
+// A neighbour list built on el for pair model m alone (its cutoff, kinds' exclusion, owner).
+NeighborList list_for(const ForceModel& m, const Elements& el) {
+  NeighborList nl(m.cutoff(), IntegratorSettings{}.skin);
+  nl.set_exclusion(
+      [&m](const Elements& e, std::size_t i, std::size_t j) { return m.excludes(e, i, j); });
+  nl.set_owner(&m);
+  nl.build(el);
+  return nl;
+}
+
+// One evaluation of model m per iteration into a sink of `threads` slots (cleared untimed), after
+// one untimed warm-up evaluation.
+void time_evaluations(benchmark::State& state, const ForceModel& m, const Elements& el,
+                      const NeighborList* nl, int threads) {
+  ForceSink sink;
+  sink.resize(el.size(), threads, m.dissipative());
+  m.compute(el, nl, sink);  // warm-up
+  for (auto _ : state) {
+    state.PauseTiming();
+    sink.clear();
+    state.ResumeTiming();
+    m.compute(el, nl, sink);
+  }
+}
+
 // Issue 13's films, the peer code's (waLBerla mesa_pd) CNT film set-up reproduced with our
 // generator: 396 tubes × 148 segments = 58 608 segments, relaxed 500 steps at dt 20 fs under
 // local damping 0.2 (no dashpots).
@@ -218,25 +246,13 @@ void issue13_vdw(benchmark::State& state, bool dense) {
   const Elements& el = relaxed_issue13_film(dense);
   const int threads = static_cast<int>(state.range(0));
   const AnisotropicVdw vdw;
-  NeighborList nl(vdw.cutoff(), IntegratorSettings{}.skin);
-  nl.set_exclusion(
-      [&vdw](const Elements& e, std::size_t i, std::size_t j) { return vdw.excludes(e, i, j); });
-  nl.set_owner(&vdw);
-  nl.build(el);
+  const NeighborList nl = list_for(vdw, el);
   std::size_t within = 0;
   const double rc2 = vdw.cutoff() * vdw.cutoff();
   for (std::size_t i = 0; i < el.size(); ++i)
     for (std::uint32_t m = nl.offsets()[i]; m < nl.offsets()[i + 1]; ++m)
       within += (el.x[nl.neighbors()[m]] - el.x[i]).squaredNorm() < rc2;
-  ForceSink sink;
-  sink.resize(el.size(), threads, false);
-  vdw.compute(el, &nl, sink);  // warm-up
-  for (auto _ : state) {
-    state.PauseTiming();
-    sink.clear();
-    state.ResumeTiming();
-    vdw.compute(el, &nl, sink);
-  }
+  time_evaluations(state, vdw, el, &nl, threads);
   const double evals = static_cast<double>(state.iterations());
   const double n = static_cast<double>(el.size());
   state.counters["ns_per_pair"] =
@@ -259,15 +275,7 @@ void BM_SparseFilmBonds(benchmark::State& state) {
   const Elements& el = relaxed_issue13_film(false);
   const int threads = static_cast<int>(state.range(0));
   const auto bonds = make_film(issue13_film(false)).bonds;
-  ForceSink sink;
-  sink.resize(el.size(), threads, false);
-  bonds->compute(el, nullptr, sink);  // warm-up
-  for (auto _ : state) {
-    state.PauseTiming();
-    sink.clear();
-    state.ResumeTiming();
-    bonds->compute(el, nullptr, sink);
-  }
+  time_evaluations(state, *bonds, el, nullptr, threads);
   const double nb = static_cast<double>(bonds->bonds().size());
   state.counters["ns_per_bond"] =
       benchmark::Counter(nb * static_cast<double>(state.iterations()) * 1e-9,
@@ -319,21 +327,8 @@ void BM_TwistRopeDashpot(benchmark::State& state) {
   const auto eval = state.range(1) ? DashpotEvaluation::Batched : DashpotEvaluation::Scalar;
   const ViscousContactDamping model(ContactDampingParams{}, eval);
   const ForceModel& dashpot = model;  // through the virtual call, as System runs it
-  NeighborList nl(dashpot.cutoff(), IntegratorSettings{}.skin);
-  nl.set_exclusion([&dashpot](const Elements& e, std::size_t i, std::size_t j) {
-    return dashpot.excludes(e, i, j);
-  });
-  nl.set_owner(&dashpot);
-  nl.build(rope);
-  ForceSink sink;
-  sink.resize(rope.size(), threads, true);
-  dashpot.compute(rope, &nl, sink);  // warm-up
-  for (auto _ : state) {
-    state.PauseTiming();
-    sink.clear();
-    state.ResumeTiming();
-    dashpot.compute(rope, &nl, sink);
-  }
+  const NeighborList nl = list_for(dashpot, rope);
+  time_evaluations(state, dashpot, rope, &nl, threads);
   state.counters["ns_per_pair"] = benchmark::Counter(
       static_cast<double>(nl.pair_count()) * static_cast<double>(state.iterations()) * 1e-9,
       benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
@@ -344,6 +339,73 @@ BENCHMARK(BM_TwistRopeDashpot)
     ->ArgsProduct({{1, 2}, {0, 1}})
     ->UseRealTime()
     ->Unit(benchmark::kMicrosecond);
+
+// The tensile job's medium film (tensile.md §3.1, Table 5-1: 350 tubes × 350 segments = 122 500
+// segments in 500 × 500 × 11 nm, ≤ 2° out of plane; nps:1 adds 4000 Si nanoparticles by
+// np_placement) in the job's own system (tensile_film_system: bonds, vdW, NP contacts and all
+// dashpots at ψ = 0.03, auto step, no local damping: the relax stage's settings), full steps on 1
+// and 2 threads. state:0 ready to relax (as generated), state:1 briefly pre-relaxed (100 steps at
+// the pre-relaxation's local damping 0.7, velocities then zeroed). The film gains pairs as it
+// relaxes: ~19 listed pairs per segment ready to relax, ~27 once relaxed (pairs_per_element
+// reports this run's), so the relaxed rate is below the ready-to-relax one.
+const Elements& tensile_medium_film(bool nps, bool prerelaxed) {
+  auto make = [](bool with_nps, bool relax) {
+    TensileFilmSpec spec = TensileFilmSpec::of_size(FilmSize::Medium);
+    spec.seed = 13;
+    spec.nanoparticles = with_nps ? 4000 : 0;
+    Elements el;
+    add_tensile_film(el, spec);
+    if (!relax) return el;
+    IntegratorSettings set;
+    set.local_damping = 0.7;
+    auto sys = tensile_film_system(std::move(el), set, 0.03);
+    sys->run(100);
+    Elements out = sys->elements();
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      out.v[i].setZero();
+      out.w[i].setZero();
+    }
+    return out;
+  };
+  static std::map<std::pair<bool, bool>, Elements> cache;
+  auto it = cache.find({nps, prerelaxed});
+  if (it == cache.end())
+    it = cache.emplace(std::pair{nps, prerelaxed}, make(nps, prerelaxed)).first;
+  return it->second;
+}
+
+void BM_TensileMediumFilm(benchmark::State& state) {
+  const bool nps = state.range(1) != 0, prerelaxed = state.range(2) != 0;
+  Elements el = tensile_medium_film(nps, prerelaxed);
+  // The bonds' rest state is the generated film's: bonds made on it, reused on the relaxed one.
+  Elements generated;
+  TensileFilmSpec spec = TensileFilmSpec::of_size(FilmSize::Medium);
+  spec.seed = 13;
+  spec.nanoparticles = nps ? 4000 : 0;
+  add_tensile_film(generated, spec);
+  const auto rest = ParallelBond::from_topology(generated, BondType::Cnt, cnt_bond_stiffness());
+  IntegratorSettings set;
+  set.threads = static_cast<int>(state.range(0));
+  auto sys = tensile_film_system(std::move(el), set, 0.03, rest.get());
+  sys->run(5);  // warm-up
+  const long steps0 = sys->steps();
+  const StepTimers t0 = sys->timers();
+  for (auto _ : state) sys->run(5);
+  const double steps = static_cast<double>(sys->steps() - steps0);
+  const double n = static_cast<double>(sys->elements().size());
+  state.counters["element_steps_per_s"] =
+      benchmark::Counter(n * steps, benchmark::Counter::kIsRate);
+  add_phase_counters(state, t0, sys->timers(), steps);
+  state.counters["elements"] = n;
+  state.counters["dt_fs"] = sys->dt() * 1e3;
+  state.counters["pairs_per_element"] = static_cast<double>(sys->neighbors()->pair_count()) / n;
+}
+BENCHMARK(BM_TensileMediumFilm)
+    ->ArgNames({"threads", "nps", "state"})
+    ->ArgsProduct({{1, 2}, {0, 1}, {0, 1}})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(2);
 
 // The neighbour-list build alone on the (unrelaxed) film, with the vdW model's exclusion.
 void BM_FilmNeighborBuild(benchmark::State& state) {
