@@ -393,31 +393,30 @@ std::string axis_label(const std::vector<std::string>& columns) {
   return join(labels, ", ");
 }
 
-void render_plot(const PlotRequest& request, const std::vector<SeriesFrame>& frames) {
-  if (frames.empty()) throw PlotError("the job has no frames to plot");
-  const TempDir tmp;
-  const std::string data = tmp.file("series.dat"), script = tmp.file("plot.gp"),
-                    log = tmp.file("gnuplot.log");
-  write_data(data, request, frames);
+namespace {
+
+// Writes `text` as the script in `tmp` and runs it into out_path: the picture's directory made,
+// the file checked writable first (so that the error names it), a stale picture removed, and a
+// picture written.
+void draw(const TempDir& tmp, const std::string& text, const std::string& out_path) {
+  const std::string script = tmp.file("plot.gp"), log = tmp.file("gnuplot.log");
   std::error_code ec;
-  const fs::path parent = fs::path(request.out_path).parent_path();
+  const fs::path parent = fs::path(out_path).parent_path();
   if (!parent.empty()) fs::create_directories(parent, ec);
-  if (ec)
-    throw PlotError("cannot create the directory of '" + request.out_path + "': " + ec.message());
+  if (ec) throw PlotError("cannot create the directory of '" + out_path + "': " + ec.message());
   {
     std::ofstream os(script);
-    os << script_text(request, data, frames);
+    os << text;
     if (!os.flush()) throw PlotError("cannot write the gnuplot script to '" + script + "'");
   }
-  if (fs::is_directory(request.out_path, ec))
-    throw PlotError("cannot write the picture '" + request.out_path + "': it is a directory");
-  fs::remove(request.out_path, ec);  // so that a stale picture never passes for a new one
+  if (fs::is_directory(out_path, ec))
+    throw PlotError("cannot write the picture '" + out_path + "': it is a directory");
+  fs::remove(out_path, ec);  // so that a stale picture never passes for a new one
   {
     // Writable? Checked here so that the error names the file, not gnuplot's script line.
-    std::ofstream probe(request.out_path, std::ios::binary | std::ios::trunc);
+    std::ofstream probe(out_path, std::ios::binary | std::ios::trunc);
     if (!probe)
-      throw PlotError("cannot write the picture '" + request.out_path +
-                      "': " + std::strerror(errno));
+      throw PlotError("cannot write the picture '" + out_path + "': " + std::strerror(errno));
   }
   const int status = run_gnuplot(gnuplot_binary(), script, log);
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
@@ -425,7 +424,30 @@ void render_plot(const PlotRequest& request, const std::vector<SeriesFrame>& fra
                     (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status))
                                        : std::string("killed by a signal")) +
                     "): " + read_tail(log, 800));
-  check_picture(request.out_path, log);
+  check_picture(out_path, log);
+}
+
+}  // namespace
+
+void render_plot(const PlotRequest& request, const std::vector<SeriesFrame>& frames) {
+  if (frames.empty()) throw PlotError("the job has no frames to plot");
+  const TempDir tmp;
+  const std::string data = tmp.file("series.dat");
+  write_data(data, request, frames);
+  draw(tmp, script_text(request, data, frames), request.out_path);
+}
+
+std::string gnuplot_quoted(const std::string& s) { return quoted(s); }
+
+void render_gnuplot(const std::string& out_path, const std::string& body) {
+  const TempDir tmp;
+  std::ostringstream s;
+  s << "set encoding utf8\n"
+    << terminal_line(plot_terminal(out_path)) << "\nset termoption noenhanced\n"
+    << "set output " << quoted(fs::absolute(out_path).string()) << "\n"
+    << line_types() << "set grid\n"
+    << body << "\nset output\n";
+  draw(tmp, s.str(), out_path);
 }
 
 }  // namespace mdem::cli

@@ -49,4 +49,11 @@ std::string axis_label(const std::vector<std::string>& columns);
 // Throws PlotError (gnuplot missing: says to install gnuplot-nox).
 void render_plot(const PlotRequest& request, const std::vector<SeriesFrame>& frames);
 
+// Another picture by the same means: gnuplot runs `body` (with its data inline) after the common
+// header (UTF-8, the terminal of out_path's extension, the output, line colours, a grid), with
+// render_plot's checks. Throws PlotError, or UsageError for an unsupported extension.
+void render_gnuplot(const std::string& out_path, const std::string& body);
+// `s` as a gnuplot single-quoted string.
+std::string gnuplot_quoted(const std::string& s);
+
 }  // namespace mdem::cli

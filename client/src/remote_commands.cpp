@@ -23,6 +23,7 @@
 
 namespace mdem::cli {
 namespace {
+#include "study_commands.h"
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
@@ -82,6 +83,7 @@ void print_watch_help(std::ostream& os) {
         "\n"
         "Follows a daemon's job until it ends, storing its energy frames, snapshots, state and\n"
         "final report in the local results database as they arrive (then `mdem export` and\n"
+        "       mdem watch --study ID [same flags]   (each job of a study, then its table)\n"
         "`mdem plot` work on it as on a job of `mdem run`). Shows a progress bar on a terminal,\n"
         "plain lines when piped, and the daemon's log lines and notices (e.g. frames it skipped\n"
         "because its event log fell behind). Resumes where the database stops: watching again,\n"
@@ -110,6 +112,7 @@ void print_cancel_help(std::ostream& os) {
         "\n"
         "Cancels a queued or running job on the daemon; a running one stops within a second and\n"
         "keeps what it produced (`mdem watch ID` fetches it). Cancelling a finished job changes\n"
+        "       mdem cancel --study ID [--db PATH] [connection flags]   (every job of a study)\n"
         "nothing. ID is passed to the daemon as given, or completed from the local database when\n"
         "it is a prefix of a job recorded there.\n"
         "\n"
@@ -874,3 +877,5 @@ int cancel(const std::vector<std::string>& args, std::ostream& out, std::ostream
 }
 
 }  // namespace mdem::cli
+  if (names_study(args) && !wants_help(args)) return watch_study(args, out, err);
+  if (names_study(args) && !wants_help(args)) return cancel_study(args, out, err);

@@ -13,6 +13,8 @@
 #include "remote.h"
 #include "remote_commands.h"
 #include "results_store.h"
+#include "study_commands.h"
+#include "study_store.h"
 
 namespace mdem::cli {
 namespace {
@@ -42,6 +44,7 @@ constexpr const char* kRemoteExitHelp =
 void print_ls_help(std::ostream& os) {
   os << "Usage: mdem ls [--db PATH] [--json]\n"
         "       mdem ls --server HOST:PORT [--all] [--limit N] [--json] [connection flags]\n"
+        "       mdem ls --study ID [--db PATH] [--json]   (a study's jobs: `mdem study --help`)\n"
         "\n"
         "Lists the jobs of the local results database, newest first: id, kind, state, creation\n"
         "time (UTC) and highlights of the spec and summary (name, morphology, element count, why\n"
@@ -101,6 +104,8 @@ void print_export_help(std::ostream& os) {
 
 void print_plot_help(std::ostream& os) {
   os << "Usage: mdem plot ID [--out PATH] [--columns A,B,...] [--x COLUMN] [--db PATH]\n"
+        "       mdem plot STUDY-ID [--out PATH] [--db PATH]   (a study's errors against wall\n"
+        "                                                     time, log-log: `mdem study --help`)\n"
         "\n"
         "Draws a job's time series with gnuplot: by default the energy components (the columns\n"
         "ending in _eV) against time_ps; a tensile job's stress (GPa) against strain (%).\n"
@@ -236,9 +241,12 @@ bool ask_daemon(const std::map<std::string, std::string>& given) {
 }
 
 int run_ls(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  FlagSpec spec{{"--db", "--limit"}, {"--json", "--all", "--local"}};
+  FlagSpec spec{{"--db", "--limit", "--study"}, {"--json", "--all", "--local"}};
   add_connection_flags(spec);
   auto given = parse_flags(args, spec);
+  // A study lives in the local database (its jobs may run on a daemon: `mdem watch --study`).
+  if (given.count("--study"))
+    return ls_study(given["--study"], db_path(given), given.count("--json") > 0, out);
   if (ask_daemon(given)) return remote_ls(given, out, err);
   const std::string path = db_path(given);
   std::vector<JobRecord> jobs;
@@ -346,6 +354,12 @@ int run_export(const std::vector<std::string>& args, std::ostream& out) {
 int run_plot(const std::vector<std::string>& args, std::ostream& out) {
   const FlagSpec spec{{"--out", "--columns", "--x", "--db"}, {}};
   auto [id, given] = parse_id_and_flags(args, spec);
+  if (is_study_id(id)) {
+    for (const char* f : {"--columns", "--x"})
+      if (given.count(f))
+        throw UsageError(std::string(f) + ": not for a study (its plot is fixed)");
+    return plot_study(id, db_path(given), given.count("--out") ? given["--out"] : "", out);
+  }
   if (given.count("--out")) plot_terminal(given["--out"]);  // a bad extension before any work
   const auto store = open_store(db_path(given), id);
   const JobRecord job = resolve(*store, id);

@@ -2,12 +2,18 @@
 // varied values, here (one run after another, results in the local database) or on mdemd
 // (--server: jobs sharing a study id), and the table of each result's error against the
 // study's reference with each run's wall time. `mdem study show ID` prints a stored study again.
+#include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include "jobs.h"
 #include "mdem/cli.h"
 #include "mdem/spec.h"
+#include "plot.h"
+#include "remote.h"
+#include "study_commands.h"
+#include "study_plot.h"
 #include "study_table.h"
 
 namespace mdem::cli {
@@ -42,6 +48,10 @@ void print_help(std::ostream& os) {
         "  --db PATH            results database (default $MDEM_DB, else\n"
         "                       ~/.local/share/mdem/results.db)\n"
         "  --json               print the study's table as one JSON object\n"
+        "  --server HOST:PORT   queue the runs on mdemd instead (with --token-file, --tls,\n"
+        "                       --ca-file as for `mdem submit`), recorded here as one study:\n"
+        "                       `mdem watch --study ID` follows its jobs into the database and\n"
+        "                       then prints the table; `mdem cancel --study ID` cancels them\n"
         "\n"
         "`mdem plot ID` draws a study's errors against wall time (log-log); `mdem ls --study ID`\n"
         "lists its jobs.\n"
@@ -83,7 +93,18 @@ struct StudyPlan {
   std::string db;
   bool json = false;
   ReferenceMode mode = ReferenceMode::Auto;
+  // --server: the connection flags given, handed to `mdem submit` for each run.
+  std::vector<std::string> connection;
 };
+
+// The connection flags given (--server, --token-file, --ca-file, --tls) as arguments again.
+std::vector<std::string> connection_args(const FlagValues& given) {
+  std::vector<std::string> out;
+  for (const char* f : {"--server", "--token-file", "--ca-file"})
+    if (given.count(f)) out.insert(out.end(), {f, given.at(f)});
+  if (given.count("--tls")) out.push_back("--tls");
+  return out;
+}
 
 StudyPlan parse_plan(const SpecKind& kind, std::vector<std::string> args) {
   StudyPlan plan;
@@ -93,7 +114,12 @@ StudyPlan parse_plan(const SpecKind& kind, std::vector<std::string> args) {
   fs.with_value.push_back("--db");
   fs.with_value.push_back("--reference");
   fs.switches.push_back("--json");
+  add_connection_flags(fs);
   const FlagValues given = parse_flags(args, fs);
+  if (!given.count("--server"))
+    for (const char* f : {"--token-file", "--ca-file", "--tls"})
+      if (given.count(f)) throw UsageError(std::string(f) + ": only with --server HOST:PORT");
+  plan.connection = connection_args(given);
   plan.mode = reference_mode(given);
   plan.base = spec_from_flags(kind, given);
   for (const std::string& v : vary) plan.fields.push_back(parse_vary(kind, v));
@@ -116,15 +142,22 @@ int finish(std::ostream& out, const StudyTable& t, bool as_json) {
   return kOk;
 }
 
-int run_local(const StudyPlan& plan, std::ostream& out, std::ostream& err) {
-  ResultsStore jobs(plan.db);
-  StudyStore studies(plan.db);
+// A new study of the plan, recorded (server: the daemon that runs its jobs, "" for here).
+StudyRecord record_study(StudyStore& studies, const StudyPlan& plan, const std::string& server) {
   StudyRecord study;
   study.id = StudyStore::new_study_id();
   study.kind = plan.kind->name;
   study.spec_json = spec::to_json(plan.base, false);
   study.vary_json = vary_json(plan.fields);
+  study.server = server;
   studies.create_study(study);
+  return study;
+}
+
+int run_local(const StudyPlan& plan, std::ostream& out, std::ostream& err) {
+  ResultsStore jobs(plan.db);
+  StudyStore studies(plan.db);
+  const StudyRecord study = record_study(studies, plan, "");
   err << "study " << study.id << ": " << plan.points.size() << " " << plan.kind->name
       << " runs in this process\n";
   for (std::size_t i = 0; i < plan.points.size(); ++i) {
@@ -159,24 +192,175 @@ int run_local(const StudyPlan& plan, std::ostream& out, std::ostream& err) {
   return finish(out, t, plan.json);
 }
 
+// The study's table from the database at db, its errors computed again and stored.
+StudyTable open_study(const std::string& id, const std::string& db, ReferenceMode mode) {
+  std::error_code ec;
+  if (!std::filesystem::exists(db, ec))
+    throw StoreError("no study '" + id + "' in " + db + " (the database does not exist)");
+  ResultsStore jobs(db);
+  StudyStore studies(db);
+  const std::optional<StudyRecord> s = studies.find(id);
+  if (!s) throw StoreError("no study '" + id + "' in " + db);
+  StudyTable t = study_table(jobs, studies, *s, mode);
+  store_errors(studies, t);
+  return t;
+}
+
+// Each run queued on the daemon through `mdem submit` (its spec as a file), recorded here as a
+// job of the study; `mdem watch --study` follows them and computes the errors.
+int run_remote(const StudyPlan& plan, std::ostream& out, std::ostream& err) {
+  ResultsStore jobs(plan.db);
+  StudyStore studies(plan.db);
+  const StudyRecord study = record_study(studies, plan, plan.connection.at(1));
+  const std::filesystem::path spec_file =
+      std::filesystem::temp_directory_path() / (study.id + "-spec.json");
+  int queued = 0;
+  for (std::size_t i = 0; i < plan.points.size(); ++i) {
+    {
+      std::ofstream os(spec_file);
+      os << spec::to_json(varied_spec(plan.base, plan.fields, plan.points[i]), false);
+      if (!os.flush()) throw StoreError("cannot write " + spec_file.string());
+    }
+    std::vector<std::string> args = {plan.kind->name, "--spec", spec_file.string(),
+                                     "--json",        "--db",   plan.db};
+    args.insert(args.end(), plan.connection.begin(), plan.connection.end());
+    std::ostringstream reply, submit_err;
+    const int code = submit(args, reply, submit_err);
+    if (code != kOk) {
+      std::filesystem::remove(spec_file);
+      err << submit_err.str();
+      err << "study " << study.id << ": " << queued << " of " << plan.points.size()
+          << " runs queued before the daemon refused one\n";
+      return code;
+    }
+    const json r = json::parse(reply.str());
+    studies.add_run(study.id, {static_cast<int>(i), r.at("job_id").get<std::string>(),
+                               json(plan.points[i]).dump()});
+    ++queued;
+    err << "  run " << i + 1 << "/" << plan.points.size() << " ("
+        << point_text(plan.fields, plan.points[i]) << "): queued "
+        << r.at("job_id").get<std::string>() << "\n";
+  }
+  std::filesystem::remove(spec_file);
+  if (plan.json) {
+    write_json(out, json{{"study_id", study.id}, {"server", study.server}, {"runs", queued}});
+    out << "\n";
+  } else {
+    out << study.id << "\n";
+    err << "study " << study.id << ": " << queued << " jobs queued on " << study.server
+        << "; follow them with `mdem watch --study " << study.id
+        << "` (which then prints the errors)\n";
+  }
+  return kOk;
+}
+
 int show(const std::vector<std::string>& args, std::ostream& out) {
   const FlagSpec fs{{"--db", "--reference"}, {"--json"}};
   auto [id, given] = parse_id_and_flags(args, fs);
   const ReferenceMode mode = reference_mode(given);
   const std::string db = given.count("--db") ? given["--db"] : ResultsStore::default_path();
-  std::error_code ec;
-  if (!std::filesystem::exists(db, ec))
-    throw UsageError("no study '" + id + "' in " + db + " (the database does not exist)");
-  ResultsStore jobs(db);
-  StudyStore studies(db);
-  const std::optional<StudyRecord> s = studies.find(id);
-  if (!s) throw UsageError("no study '" + id + "' in " + db);
-  StudyTable t = study_table(jobs, studies, *s, mode);
-  store_errors(studies, t);
-  return finish(out, t, given.count("--json") > 0);
+  return finish(out, open_study(id, db, mode), given.count("--json") > 0);
+}
+
+// The study's runs and the flags to hand to each job's command: --db and the connection flags.
+struct StudyCall {
+  std::string id, db;
+  bool json = false;
+  std::vector<std::string> pass;
+};
+
+StudyCall study_call(const std::vector<std::string>& args, bool watching) {
+  FlagSpec fs{{"--study", "--db"}, {"--json"}};
+  if (watching) fs.with_value.push_back("--reconnect-timeout");
+  add_connection_flags(fs);
+  const FlagValues given = parse_flags(args, fs);
+  StudyCall c;
+  c.id = given.at("--study");
+  c.db = given.count("--db") ? given.at("--db") : ResultsStore::default_path();
+  c.json = given.count("--json") > 0;
+  c.pass = connection_args(given);
+  c.pass.insert(c.pass.end(), {"--db", c.db});
+  if (given.count("--reconnect-timeout"))
+    c.pass.insert(c.pass.end(), {"--reconnect-timeout", given.at("--reconnect-timeout")});
+  return c;
 }
 
 }  // namespace
+
+int plot_study(const std::string& id, const std::string& db, const std::string& out_path,
+               std::ostream& out) {
+  if (!out_path.empty()) plot_terminal(out_path);  // a bad extension before any work
+  const StudyTable t = open_study(id, db, ReferenceMode::Auto);
+  const std::string path = out_path.empty() ? t.study.id + ".png" : out_path;
+  const StudyPlotInfo info = render_study_plot(t, path);
+  out << "wrote " << path << " (" << info.curves << " result(s) against wall time, "
+      << t.runs.size() << " runs)\n";
+  return kOk;
+}
+
+bool names_study(const std::vector<std::string>& args) {
+  for (const std::string& a : args)
+    if (a == "--study" || a.rfind("--study=", 0) == 0) return true;
+  return false;
+}
+
+int watch_study(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  return guarded_run(
+      "mdem watch",
+      [&] {
+        const StudyCall c = study_call(args, true);
+        const StudyTable before = open_study(c.id, c.db, ReferenceMode::Auto);
+        for (const StudyRunRecord& r : before.records) {
+          std::vector<std::string> a = {r.job_id};
+          a.insert(a.end(), c.pass.begin(), c.pass.end());
+          a.push_back("--json");  // the job's report is read back from the database
+          std::ostringstream report;
+          err << "study " << before.study.id << ": watching " << r.job_id << "\n";
+          const int code = watch(a, report, err);
+          if (code != kOk && code != kJobFailed) return code;  // no daemon, Ctrl-C
+        }
+        return finish(out, open_study(before.study.id, c.db, ReferenceMode::Auto), c.json);
+      },
+      err);
+}
+
+int cancel_study(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  return guarded_run(
+      "mdem cancel",
+      [&] {
+        const StudyCall c = study_call(args, false);
+        const StudyTable t = open_study(c.id, c.db, ReferenceMode::Auto);
+        int worst = kOk;
+        for (const StudyRunRecord& r : t.records) {
+          std::vector<std::string> a = {r.job_id};
+          a.insert(a.end(), c.pass.begin(), c.pass.end());
+          if (const int code = cancel(a, out, err); code != kOk) worst = code;
+        }
+        return worst;
+      },
+      err);
+}
+
+int ls_study(const std::string& id, const std::string& db, bool as_json, std::ostream& out) {
+  const StudyTable t = open_study(id, db, ReferenceMode::Auto);
+  if (as_json) {
+    json all = json::array();
+    for (std::size_t i = 0; i < t.runs.size(); ++i)
+      all.push_back({{"job_id", t.runs[i].job_id},
+                     {"point", t.runs[i].point},
+                     {"state", t.states[i]},
+                     {"wall_s", t.runs[i].wall_s}});
+    out << all.dump(2) << "\n";
+    return kOk;
+  }
+  std::vector<std::vector<std::string>> rows = {{"ID", "VALUES", "STATE", "WALL[s]"}};
+  for (std::size_t i = 0; i < t.runs.size(); ++i)
+    rows.push_back({t.runs[i].job_id, point_text(t.fields, t.runs[i].point), t.states[i],
+                    std::isfinite(t.runs[i].wall_s) ? spec::number_text(t.runs[i].wall_s) : "-"});
+  out << "study " << t.study.id << " (" << t.study.kind << ")\n";
+  print_table(out, rows);
+  return kOk;
+}
 
 int study(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   if (args.empty() || args.front() == "--help" || args.front() == "-h") {
@@ -210,7 +394,11 @@ int study(const std::vector<std::string>& args, std::ostream& out, std::ostream&
     return kUsage;
   }
   return guarded_run(
-      command, [&] { return run_local(plan, out, err); }, err);
+      command,
+      [&] {
+        return plan.connection.empty() ? run_local(plan, out, err) : run_remote(plan, out, err);
+      },
+      err);
 }
 
 }  // namespace mdem::cli

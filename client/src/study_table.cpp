@@ -49,17 +49,17 @@ StudyRun study_run(const StudyRunRecord& rec, const JobRecord& job,
 std::string reference_text(const StudyTable& t) {
   const StudyErrors& e = t.errors;
   if (t.runs.empty() || e.results.empty()) return "no run succeeded: no reference";
-  const std::string finest = t.runs[e.finest].job_id + " (" +
-                             point_text(t.fields, t.runs[e.finest].point) +
-                             ", the most accurate run)";
+  const std::string finest = "the most accurate run, " +
+                             point_text(t.fields, t.runs[e.finest].point) + " (" +
+                             t.runs[e.finest].job_id + ")";
   bool any_extrapolated = false;
   for (const ResultError& r : e.results) any_extrapolated |= r.extrapolated;
-  if (!any_extrapolated) return "run " + finest + (e.note.empty() ? "" : "; " + e.note);
-  std::string runs;
+  if (!any_extrapolated) return finest + (e.note.empty() ? "" : "; " + e.note);
+  std::string values;
   for (std::size_t i : e.richardson_runs)
-    runs += (runs.empty() ? "" : ", ") + point_text(t.fields, t.runs[i].point);
-  return "Richardson's extrapolation from the runs at " + runs + " (refinement ratio " +
-         num(e.ratio, 4) + ") where the differences shrink; otherwise run " + finest;
+    values += (values.empty() ? "" : ", ") + spec::number_text(t.runs[i].point[0]);
+  return "Richardson's extrapolation from " + short_name(t.fields[0].path) + " = " + values +
+         " (ratio " + num(e.ratio, 4) + ") where the differences shrink; otherwise " + finest;
 }
 
 }  // namespace
@@ -175,8 +175,10 @@ void print_study_table(std::ostream& out, const StudyTable& t) {
   for (const ResultError& e : t.errors.results) {
     out << "  " << e.field.label << ": " << num(e.reference, 8)
         << (e.field.unit.empty() ? "" : " " + e.field.unit)
-        << (e.extrapolated ? " (extrapolated)" : " (most accurate run)");
-    if (std::isfinite(e.order)) out << ", observed order " << num(e.order, 3);
+        << (e.extrapolated ? " (extrapolated), observed order " + num(e.order, 3)
+                           : " (the most accurate run)");
+    if (!e.extrapolated && std::isfinite(e.order))
+      out << "; the differences do not shrink (observed order " << num(e.order, 3) << ")";
     out << "\n";
   }
 }

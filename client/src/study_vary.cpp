@@ -16,19 +16,12 @@ namespace {
 using google::protobuf::FieldDescriptor;
 using google::protobuf::Message;
 
+// A single number: not a list, and not a message, string, bool or enum.
 bool numeric(const FieldDescriptor* f) {
-  if (f->is_repeated()) return false;
-  switch (f->cpp_type()) {
-    case FieldDescriptor::CPPTYPE_DOUBLE:
-    case FieldDescriptor::CPPTYPE_FLOAT:
-    case FieldDescriptor::CPPTYPE_INT32:
-    case FieldDescriptor::CPPTYPE_INT64:
-    case FieldDescriptor::CPPTYPE_UINT32:
-    case FieldDescriptor::CPPTYPE_UINT64:
-      return true;
-    default:
-      return false;
-  }
+  using T = FieldDescriptor::CppType;
+  const T t = f->cpp_type();
+  return !f->is_repeated() && t != T::CPPTYPE_MESSAGE && t != T::CPPTYPE_STRING &&
+         t != T::CPPTYPE_BOOL && t != T::CPPTYPE_ENUM;
 }
 
 bool is_integer(const FieldDescriptor* f) {
