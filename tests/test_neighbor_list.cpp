@@ -380,6 +380,23 @@ TEST(NeighborList, NonFinitePositionThrowsNamingTheElement) {
   }
 }
 
+// The threaded bounding box names the first non-finite element, whichever thread meets it.
+TEST(NeighborList, NonFinitePositionInTheThreadedPathNamesTheFirstElement) {
+  ThreadGuard guard;
+  omp_set_num_threads(2);
+  Elements el = small_film(9, 150, 60, 120);
+  ASSERT_GT(el.size(), 8000u);
+  el.x[7000].x() = std::numeric_limits<double>::quiet_NaN();
+  el.x[3001].y() = std::numeric_limits<double>::infinity();
+  NeighborList nl(kCutoff, kSkin);
+  try {
+    nl.build(el);
+    ADD_FAILURE() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("element 3001 "), std::string::npos) << e.what();
+  }
+}
+
 TEST(NeighborList, RejectsBadParameters) {
   EXPECT_THROW(NeighborList(0.0, 0.5), std::invalid_argument);
   EXPECT_THROW(NeighborList(-1.0, 0.5), std::invalid_argument);
