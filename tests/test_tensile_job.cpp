@@ -157,14 +157,14 @@ TEST(TensileJob, NanoparticlesDepositedAfterRelaxation) {
   EXPECT_EQ(num(before.summary(), "nanoparticles"), 4);
 }
 
-// N straight parallel tubes along x, 10 nm apart in y (beyond every contact's reach), through
-// both grips.
-Elements straight_tubes(int n_tubes, int segments) {
+// Straight parallel tubes along x, 10 nm apart in y (beyond every contact's reach), through both
+// grips: tube k has segments[k] segments and starts at x = x0 (so the film is not mirror-symmetric
+// when the lengths differ or x0 is off-centre).
+Elements straight_tubes(const std::vector<int>& segments, double x0) {
   Elements el;
-  const double T = cnt::kSegmentLength;
-  for (int k = 0; k < n_tubes; ++k)
-    add_straight_tube(el, Vec3(-0.5 * (segments - 1) * T, 10.0 * (k - 0.5 * (n_tubes - 1)), 0),
-                      Vec3::UnitX(), segments, k);
+  const int n = static_cast<int>(segments.size());
+  for (int k = 0; k < n; ++k)
+    add_straight_tube(el, Vec3(x0, 10.0 * (k - 0.5 * (n - 1)), 0), Vec3::UnitX(), segments[k], k);
   return el;
 }
 
@@ -179,45 +179,64 @@ TensileJobSpec analytic_spec() {
   return s;
 }
 
-// Bonds that stretch between the grips: those not wholly inside one grip.
-int free_bonds(const TensileJob& job) {
-  const Elements& el = const_cast<TensileJob&>(job).system().elements();
+// Per tube, the bonds that stretch between the grips: those not wholly inside one grip.
+std::vector<int> free_bonds(TensileJob& job) {
+  const Elements& el = job.system().elements();
   std::vector<int> grip(el.size(), 0);
   for (std::size_t i : el.group_indices(kGripLeft)) grip[i] = 1;
   for (std::size_t i : el.group_indices(kGripRight)) grip[i] = 2;
-  int n = 0;
-  for (const Bond& b : const_cast<TensileJob&>(job).system().find<ParallelBond>()->bonds())
-    n += !(grip[b.i] != 0 && grip[b.i] == grip[b.j]);
+  std::vector<int> n;
+  for (const Bond& b : job.system().find<ParallelBond>()->bonds()) {
+    const auto t = static_cast<std::size_t>(el.tube[b.i]);
+    if (n.size() <= t) n.resize(t + 1, 0);
+    n[t] += !(grip[b.i] != 0 && grip[b.i] == grip[b.j]);
+  }
   return n;
 }
 
 TEST(TensileJob, AnalyticFilmModulusAndGripBalance) {
-  // 3 tubes of 44 segments (58.3 nm) on a 60 nm film, pulled at 1e-3/ps after a 50 ps ramp, to
-  // 2.5 %. Each bond's axial force is kn·A·u_n and the free bonds share the grips' separation,
-  // so σ = N·kn·A·ε·L0/(n_free·W·H): E = N·kn·A·L0/(n_free·W·H) (kn·A·T = EA of tensile.md §1).
+  // 3 tubes of 44, 41 and 43 segments (55–58 nm) from x = −26 nm on a 60 nm film, pulled at
+  // 5e-4/ps after a 20 ps ramp, to 2.5 % (at 0.9 of the auto step, about 29 fs). Each bond's axial
+  // force is kn·A·u_n and a tube's n_k free bonds share the grips' separation ε·L0, so σ = Σ_k
+  // kn·A·ε·L0/(n_k·W·H): E = Σ_k kn·A·L0/(n_k·W·H) (kn·A·T = EA of tensile.md §1; with n_k·T = L0,
+  // N·EA/(W·H)).
   TensileJobSpec s = analytic_spec();
   s.local_damping = 0.1;
-  s.monotonic.ramp_time = 50;
-  s.monotonic.strain_rate = 1e-3;
+  s.monotonic.ramp_time = 20;
+  s.monotonic.strain_rate = 5e-4;
   s.monotonic.target_strain = 0.025;
   s.test_report_strains = {};
-  const int N = 3;
-  TensileJob job(straight_tubes(N, 44), s, one_thread());
+  // A run of segments inside the free part, left of the middle, 4× heavier: the film between
+  // the grips is not mirror-symmetric, so F_L + F_R does not vanish by symmetry alone.
+  Elements film = straight_tubes({44, 41, 43}, -26.0);
+  for (int k = 12; k < 18; ++k) {
+    film.mass[k] *= 4;
+    film.inv_mass[k] /= 4;
+    film.inertia[k] *= 4;
+  }
+  TensileJob job(std::move(film), s, one_thread());
   run(job);
   const Summary sum = job.summary();
-  const int n_free = free_bonds(job) / N;
   const double kn_area = cnt_bond_stiffness().kn_area;
-  const double expected = units::to_GPa(N * kn_area * 60.0 / (n_free * 60.0 * 11.0));
-  EXPECT_NEAR(num(sum, "youngs_modulus_GPa"), expected, 0.01 * expected)
-      << n_free << " free bonds per tube";
-  // Grip reactions balance (F_L + F_R is what the free film gains in momentum per unit time):
-  // after the ramp, |F_L + F_R| stays a small fraction of |F_L|.
-  double worst = 0;
-  for (const GripSample& g : job.stress_sampler().samples())
-    if (g.t > job.protocol().start_time() + 60)
-      worst = std::max(worst, std::abs(g.f_left + g.f_right) / std::abs(g.f_left));
+  double expected = 0;
+  for (int n : free_bonds(job)) expected += units::to_GPa(kn_area * 60.0 / (n * 60.0 * 11.0));
+  EXPECT_NEAR(num(sum, "youngs_modulus_GPa"), expected, 0.01 * expected);
+  // Grip reactions balance: F_L + F_R is the momentum the free film gains per unit time plus the
+  // local damping on it; after the ramp, at a constant rate, it is a small fraction of |F_L|.
+  // During the ramp the heavy run accelerates and it is not (checked, so the bound means
+  // something).
+  double worst = 0, ramp = 0;
+  int after = 0;
+  const double t0 = job.protocol().start_time();
+  for (const GripSample& g : job.stress_sampler().samples()) {
+    if (g.f_left == 0) continue;
+    const double r = std::abs(g.f_left + g.f_right) / std::abs(g.f_left);
+    if (g.t > t0 + 25) worst = std::max(worst, r), ++after;
+    if (g.t > t0 + 2 && g.t < t0 + 18) ramp = std::max(ramp, r);
+  }
+  EXPECT_GE(after, 30);
   EXPECT_LT(worst, 1e-2);
-  EXPECT_GE(job.stress_sampler().samples().size(), 50u);
+  EXPECT_GT(ramp, 10 * worst);
 }
 
 TEST(TensileJob, ElasticCyclicLoopEnclosesNoArea) {
@@ -229,7 +248,7 @@ TEST(TensileJob, ElasticCyclicLoopEnclosesNoArea) {
   s.cyclic.mean_rate = 0;
   s.cyclic.period = 100;
   s.cyclic.cycles = 2;
-  TensileJob job(straight_tubes(3, 44), s, one_thread());
+  TensileJob job(straight_tubes({44, 41, 43}, -26.0), s, one_thread());
   run(job);
   const Summary sum = job.summary();
   ASSERT_EQ(num(sum, "cycles_complete"), 2);
