@@ -200,9 +200,14 @@ class TensileJob::Records final : public Stateful {
 // evaluation before, one step behind).
 class TensileJob::RelaxTracker final : public Updater {
  public:
-  RelaxTracker(std::vector<double> report_times, double count_every)
-      : times_(std::move(report_times)), every_(count_every) {
+  // Times past the relaxation's end are dropped; its end is always a report time.
+  RelaxTracker(const std::vector<double>& report_times, double relax_ps, double count_every)
+      : every_(count_every) {
+    for (double t : report_times)
+      if (t < relax_ps) times_.push_back(t);
+    times_.push_back(relax_ps);
     std::sort(times_.begin(), times_.end());
+    times_.erase(std::unique(times_.begin(), times_.end()), times_.end());
   }
   void apply(System& sys, double t) override {
     const double tol = 0.5 * sys.dt();
@@ -548,8 +553,8 @@ void TensileJob::build(Elements el) {
   gs.every = spec_.sample_every_ps;
   sampler_ = std::make_shared<GripStressSampler>(
       [p = protocol_.get()](double t) { return p->strain(t); }, gs);
-  relax_tracker_ =
-      std::make_shared<RelaxTracker>(spec_.relax_report_ps, spec_.relax_count_every_ps);
+  relax_tracker_ = std::make_shared<RelaxTracker>(spec_.relax_report_ps, spec_.relax_ps,
+                                                  spec_.relax_count_every_ps);
   test_tracker_ = std::make_shared<TestTracker>(*this, spec_.test_report_strains);
 
   auto prerelax_stage = [&](const std::string& name, std::shared_ptr<PrerelaxCriterion>& c) {

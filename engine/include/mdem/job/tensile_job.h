@@ -93,8 +93,8 @@ struct TensileJobSpec {
   double sample_every_ps = 1.0;
 
   // When the relaxation's aligned pairs (both counts) and pores are recorded (ps since the
-  // relaxation's start, each in [0, 10^7], at most 1000; times past relax_ps are not reached;
-  // §3.4: 0, 1, 2, 3, 4, 4.5 ns). The registry-free
+  // relaxation's start, each in [0, 10^7], at most 1000; times past relax_ps are dropped and
+  // relax_ps itself is always one; §3.4: 0, 1, 2, 3, 4, 4.5 ns). The registry-free
   // count for the stabilisation time is sampled every relax_count_every_ps (> 0; §3.4: 15 ps).
   std::vector<double> relax_report_ps = {0, 1000, 2000, 3000, 4000, 4500};
   double relax_count_every_ps = 15.0;
