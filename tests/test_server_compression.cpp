@@ -97,11 +97,10 @@ TEST(ServerCompression, TinyJobSucceedsWithItsReport) {
   const JobInfo info = get_ok(d, id);
   EXPECT_EQ(info.state(), mdem::v1::SUCCEEDED);
   EXPECT_EQ(info.kind(), "compression");
-  // The element count is the bound from the spec (the particle is packed by the worker): at
-  // least the grains and the two platens, at most 1 % + 10 more.
+  // The element count: the bound from the spec at submit (the particle is packed by the worker),
+  // the real count (the grains and the two platens) once the worker built it.
   const long built = report["summary"]["grains"].get<long>() + 2;
-  EXPECT_GE(info.elements(), built);
-  EXPECT_LE(info.elements(), static_cast<long>(1.01 * built) + 12);
+  EXPECT_EQ(info.elements(), built);
   EXPECT_GT(info.total_steps(), 0);  // known once the worker built the job
   EXPECT_EQ(info.step(), info.total_steps());
   EXPECT_EQ(info.spec().compression().material(), mdem::v1::GOLD);  // finalized at submit

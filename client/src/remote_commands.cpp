@@ -6,6 +6,9 @@
 #include <algorithm>
 #include <chrono>
 #include <condition_variable>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <mutex>
 #include <thread>
@@ -20,10 +23,10 @@
 #include "remote.h"
 #include "results_store.h"
 #include "spec_flags.h"
+#include "study_commands.h"
 
 namespace mdem::cli {
 namespace {
-#include "study_commands.h"
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
@@ -80,10 +83,10 @@ void print_submit_help(const std::vector<std::string>& args, std::ostream& os) {
 
 void print_watch_help(std::ostream& os) {
   os << "Usage: mdem watch ID [--json] [--reconnect-timeout S] [--db PATH] [connection flags]\n"
+        "       mdem watch --study ID [same flags]   (each job of a study, then its table)\n"
         "\n"
         "Follows a daemon's job until it ends, storing its energy frames, snapshots, state and\n"
         "final report in the local results database as they arrive (then `mdem export` and\n"
-        "       mdem watch --study ID [same flags]   (each job of a study, then its table)\n"
         "`mdem plot` work on it as on a job of `mdem run`). Shows a progress bar on a terminal,\n"
         "plain lines when piped, and the daemon's log lines and notices (e.g. frames it skipped\n"
         "because its event log fell behind). Resumes where the database stops: watching again,\n"
@@ -109,10 +112,10 @@ void print_watch_help(std::ostream& os) {
 
 void print_cancel_help(std::ostream& os) {
   os << "Usage: mdem cancel ID [--json] [--db PATH] [connection flags]\n"
+        "       mdem cancel --study ID [--db PATH] [connection flags]   (every job of a study)\n"
         "\n"
         "Cancels a queued or running job on the daemon; a running one stops within a second and\n"
         "keeps what it produced (`mdem watch ID` fetches it). Cancelling a finished job changes\n"
-        "       mdem cancel --study ID [--db PATH] [connection flags]   (every job of a study)\n"
         "nothing. ID is passed to the daemon as given, or completed from the local database when\n"
         "it is a prefix of a job recorded there.\n"
         "\n"
@@ -197,6 +200,8 @@ json info_json(const v1::JobInfo& info) {
       {"total_steps", info.total_steps()},
       {"last_seq", info.last_seq()},
       {"resumes", info.resumes()},
+      {"queue_position", info.queue_position()},
+      {"waiting_for", info.waiting_for()},
       {"spec", info.has_spec() ? parse_or_text(spec::to_json(info.spec(), false)) : json(nullptr)},
       {"report", parse_or_text(info.report_json())}};
 }
@@ -735,6 +740,51 @@ int run_cancel(const std::vector<std::string>& args, std::ostream& out, std::ost
   return kOk;
 }
 
+// Seconds since the epoch of an ISO 8601 UTC time ("2026-01-02T03:04:05Z", with or without
+// ".123"); nullopt for anything else.
+std::optional<double> epoch_seconds(const std::string& iso) {
+  std::tm tm{};
+  double frac = 0;
+  int consumed = 0;
+  if (std::sscanf(iso.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d%n", &tm.tm_year, &tm.tm_mon, &tm.tm_mday,
+                  &tm.tm_hour, &tm.tm_min, &tm.tm_sec, &consumed) != 6)
+    return std::nullopt;
+  if (iso[consumed] == '.') frac = std::atof(("0" + iso.substr(consumed)).c_str());
+  tm.tm_year -= 1900;
+  tm.tm_mon -= 1;
+  return static_cast<double>(timegm(&tm)) + frac;
+}
+
+// The time as the local database shows it: ISO 8601 UTC to the second (the daemon's
+// milliseconds dropped), so every table shows one style.
+std::string shown_time(const std::string& iso) {
+  const std::size_t dot = iso.find('.');
+  if (dot == std::string::npos || iso.empty() || iso.back() != 'Z') return iso;
+  return iso.substr(0, dot) + "Z";
+}
+
+// Elapsed wall time of a job as Slurm prints it ([D-]HH:MM:SS): from its start to its end, or to
+// now while it runs; "-" before it started.
+std::string elapsed_text(const v1::JobInfo& info) {
+  const auto start = epoch_seconds(info.started_at());
+  if (!start) return "-";
+  const auto end =
+      info.finished_at().empty()
+          ? std::optional<double>(
+                std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
+                    .count())
+          : epoch_seconds(info.finished_at());
+  if (!end) return "-";
+  const long s = std::max(0L, static_cast<long>(*end - *start));
+  char buf[32];
+  if (s >= 86400)
+    std::snprintf(buf, sizeof buf, "%ld-%02ld:%02ld:%02ld", s / 86400, s % 86400 / 3600,
+                  s % 3600 / 60, s % 60);
+  else
+    std::snprintf(buf, sizeof buf, "%02ld:%02ld:%02ld", s / 3600, s % 3600 / 60, s % 60);
+  return buf;
+}
+
 std::string progress_text(const v1::JobInfo& info) {
   if (info.total_steps() <= 0) return "-";
   return std::to_string(info.step() * 100 / info.total_steps()) + "%";
@@ -742,7 +792,11 @@ std::string progress_text(const v1::JobInfo& info) {
 
 std::string note_text(const v1::JobInfo& info) {
   std::string text = info.name();
-  if (!info.reason().empty()) text += (text.empty() ? "" : "; ") + info.reason();
+  if (info.queue_position() > 0)  // why it waits, as squeue's REASON column
+    text += (text.empty() ? "" : "; ") + std::string("#") + std::to_string(info.queue_position()) +
+            " in queue: " + info.waiting_for();
+  else if (!info.reason().empty())
+    text += (text.empty() ? "" : "; ") + info.reason();
   constexpr std::size_t kMax = 60;
   return text.size() > kMax ? text.substr(0, kMax - 3) + "..." : text;
 }
@@ -794,13 +848,14 @@ int remote_ls(const std::map<std::string, std::string>& given, std::ostream& out
   std::vector<std::vector<std::string>> rows;
   rows.push_back({"ID"});
   if (all) rows.back().push_back("USER");
-  rows.back().insert(rows.back().end(), {"KIND", "STATE", "CREATED", "DONE", "NAME / REASON"});
+  rows.back().insert(rows.back().end(),
+                     {"KIND", "STATE", "CREATED", "ELAPSED", "DONE", "NAME / REASON"});
   for (const v1::JobInfo& info : response.jobs()) {
     rows.push_back({info.job_id()});
     if (all) rows.back().push_back(info.user());
     rows.back().insert(rows.back().end(),
-                       {info.kind(), job_state_name(info.state()), info.created_at(),
-                        progress_text(info), note_text(info)});
+                       {info.kind(), job_state_name(info.state()), shown_time(info.created_at()),
+                        elapsed_text(info), progress_text(info), note_text(info)});
   }
   print_table(out, rows);
   return kOk;
@@ -837,9 +892,13 @@ int remote_show(const std::string& id, const std::map<std::string, std::string>&
                                                 {"state:", job_state_name(info.state())}};
   if (!info.name().empty()) rows.push_back({"name:", info.name()});
   if (!info.reason().empty()) rows.push_back({"reason:", info.reason()});
-  rows.push_back({"created:", info.created_at()});
-  rows.push_back({"started:", info.started_at().empty() ? "-" : info.started_at()});
-  rows.push_back({"finished:", info.finished_at().empty() ? "-" : info.finished_at()});
+  if (info.queue_position() > 0)
+    rows.push_back({"waiting:", "position " + std::to_string(info.queue_position()) +
+                                    " in the queue; " + info.waiting_for()});
+  rows.push_back({"created:", shown_time(info.created_at())});
+  rows.push_back({"started:", info.started_at().empty() ? "-" : shown_time(info.started_at())});
+  rows.push_back({"finished:", info.finished_at().empty() ? "-" : shown_time(info.finished_at())});
+  rows.push_back({"elapsed:", elapsed_text(info)});
   rows.push_back({"progress:", std::to_string(info.step()) + " / " +
                                    std::to_string(info.total_steps()) + " steps"});
   rows.push_back({"elements:", std::to_string(info.elements())});
@@ -867,15 +926,15 @@ int submit(const std::vector<std::string>& args, std::ostream& out, std::ostream
 }
 
 int watch(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  if (names_study(args) && !wants_help(args)) return watch_study(args, out, err);
   return guarded("watch", args, out, err, print_watch_help,
                  [&] { return run_watch(args, out, err); });
 }
 
 int cancel(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  if (names_study(args) && !wants_help(args)) return cancel_study(args, out, err);
   return guarded("cancel", args, out, err, print_cancel_help,
                  [&] { return run_cancel(args, out, err); });
 }
 
 }  // namespace mdem::cli
-  if (names_study(args) && !wants_help(args)) return watch_study(args, out, err);
-  if (names_study(args) && !wants_help(args)) return cancel_study(args, out, err);

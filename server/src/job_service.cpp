@@ -8,6 +8,7 @@
 #include "mdem/job_runner.h"
 #include "mdem/spec.h"
 #include "mdem/spec_job.h"
+#include "queue_place.h"
 #include "request_check.h"
 
 namespace mdem::server {
@@ -159,6 +160,8 @@ Status JobServiceImpl::GetJob(grpc::ServerContext* ctx, const v1::GetJobRequest*
     JobRow row;
     if (Status s = visible_job(who, req->job_id(), row); !s.ok()) return s;
     *resp = row.info();
+    if (row.state == v1::QUEUED)
+      describe_wait(*resp, store_.queue(), store_.running(), config_.workers, who);
     return Status::OK;
   });
 }
@@ -172,8 +175,12 @@ Status JobServiceImpl::ListJobs(grpc::ServerContext* ctx, const v1::ListJobsRequ
       return Status(StatusCode::INVALID_ARGUMENT,
                     "limit: " + std::to_string(req->limit()) + " is not in [0, 1000] (0 = 100)");
     const int limit = req->limit() == 0 ? 100 : req->limit();
-    for (const JobRow& r : store_.list(req->all_users() ? "" : who.user, limit))
+    const std::vector<JobOwner> queue = store_.queue(), running = store_.running();
+    for (const JobRow& r : store_.list(req->all_users() ? "" : who.user, limit)) {
       *resp->add_jobs() = r.info();
+      describe_wait(*resp->mutable_jobs(resp->jobs_size() - 1), queue, running, config_.workers,
+                    who);
+    }
     return Status::OK;
   });
 }

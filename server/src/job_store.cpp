@@ -241,16 +241,38 @@ std::vector<std::string> JobStore::reconcile() {
   return ids;
 }
 
+// The queued jobs in the order claim_next takes them: the user with the fewest running jobs
+// first, then the user who started a job longest ago, then the oldest job.
+constexpr const char* kQueueOrder =
+    "SELECT id, user FROM jobs j WHERE state = ?1 ORDER BY "
+    "(SELECT COUNT(*) FROM jobs r WHERE r.user = j.user AND r.state = ?2), "
+    "(SELECT MAX(start_order) FROM jobs r WHERE r.user = j.user), created_at, id";
+
+std::vector<JobOwner> JobStore::queue() {
+  std::lock_guard lock(db_.mutex());
+  Query q(db_, kQueueOrder, "cannot read the queue");
+  q.bind(1, static_cast<long>(v1::QUEUED)).bind(2, static_cast<long>(v1::RUNNING));
+  std::vector<JobOwner> jobs;
+  while (q.step()) jobs.push_back({q.text(0), q.text(1)});
+  return jobs;
+}
+
+std::vector<JobOwner> JobStore::running() {
+  std::lock_guard lock(db_.mutex());
+  Query q(db_, "SELECT id, user FROM jobs WHERE state = ? ORDER BY start_order",
+          "cannot read the jobs");
+  q.bind(1, static_cast<long>(v1::RUNNING));
+  std::vector<JobOwner> jobs;
+  while (q.step()) jobs.push_back({q.text(0), q.text(1)});
+  return jobs;
+}
+
 std::optional<JobRow> JobStore::claim_next() {
   std::lock_guard lock(db_.mutex());
   Transaction t(db_);
   std::string id;
   {
-    Query q(db_,
-            "SELECT id FROM jobs j WHERE state = ?1 ORDER BY "
-            "(SELECT COUNT(*) FROM jobs r WHERE r.user = j.user AND r.state = ?2), "
-            "(SELECT MAX(start_order) FROM jobs r WHERE r.user = j.user), created_at, id LIMIT 1",
-            "cannot pick the next job");
+    Query q(db_, std::string(kQueueOrder) + " LIMIT 1", "cannot pick the next job");
     q.bind(1, static_cast<long>(v1::QUEUED)).bind(2, static_cast<long>(v1::RUNNING));
     if (!q.step()) return std::nullopt;
     id = q.text(0);
@@ -312,6 +334,7 @@ long JobStore::append_locked(const std::string& job_id, std::vector<v1::JobEvent
         r.last_progress_step = e.progress().step();
         r.step = std::max(r.step, e.progress().step());
         if (e.progress().total_steps() > 0) r.total_steps = e.progress().total_steps();
+        if (e.progress().elements() > 0) r.elements = e.progress().elements();
         break;
       case v1::JobEvent::kColumns:
         r.columns_logged = true;
@@ -341,7 +364,7 @@ long JobStore::append_locked(const std::string& job_id, std::vector<v1::JobEvent
   Query(db_,
         "UPDATE jobs SET state = ?, reason = ?, started_at = ?, finished_at = ?, step = ?, "
         "last_seq = ?, last_frame_step = ?, last_snapshot_step = ?, last_progress_step = ?, "
-        "columns_logged = ?, report_json = ?, total_steps = ? WHERE id = ?",
+        "columns_logged = ?, report_json = ?, total_steps = ?, elements = ? WHERE id = ?",
         "cannot update the job")
       .bind(1, static_cast<long>(r.state))
       .bind(2, r.reason)
@@ -355,7 +378,8 @@ long JobStore::append_locked(const std::string& job_id, std::vector<v1::JobEvent
       .bind(10, static_cast<long>(r.columns_logged))
       .bind(11, r.report_json)
       .bind(12, r.total_steps)
-      .bind(13, job_id)
+      .bind(13, r.elements)
+      .bind(14, job_id)
       .run();
   return r.last_seq;
 }

@@ -44,6 +44,11 @@ struct SubmitResult {
   bool created = false;
 };
 
+// A job's id and its user.
+struct JobOwner {
+  std::string id, user;
+};
+
 class JobStore {
  public:
   // Opens or creates the database (synchronous=FULL: an accepted job survives power loss too).
@@ -65,6 +70,10 @@ class JobStore {
   // The next job to run, marked RUNNING: among queued jobs, those of the user with the fewest
   // running jobs, ties to the user who least recently started one, then the oldest job.
   std::optional<JobRow> claim_next();
+  // The ids of the queued jobs in the order claim_next takes them (the queue, first to run
+  // first), and of the running jobs in the order they started.
+  std::vector<JobOwner> queue();
+  std::vector<JobOwner> running();
   // Cancels a job that is still queued; false when it is not queued.
   bool cancel_queued(const std::string& id, const std::string& reason);
 

@@ -222,6 +222,8 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
       e.mutable_progress()->set_total_steps(p.total_steps);
       e.mutable_progress()->set_time_ps(p.time_ps);
       e.mutable_progress()->set_phase(p.phase);
+      if (scene_built(*job))  // the real count replaces the estimate made at submit
+        e.mutable_progress()->set_elements(static_cast<long>(job->system().elements().size()));
       ch->push_droppable({std::move(e)}, p.step, false);
     };
     obs.cancelled = [&] { return ctl.stop.load() != kRun; };
