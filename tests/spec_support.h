@@ -59,6 +59,30 @@ struct FieldCase {
   bool real = true;  // a double: also test non-finite values
 };
 
+// Each case with each of its bad values in place of "$", read as JSON: exactly one error, on the
+// case's field, naming the value and the allowed range.
+inline void expect_each_out_of_range_refused(const std::vector<FieldCase>& cases) {
+  for (const FieldCase& c : cases)
+    for (const std::string& value : c.bad) {
+      SCOPED_TRACE(c.field + " = " + value);
+      expect_one_error(errors_of(spec::parse_json, replace_value(c.json, value)), c.field,
+                       {value, c.allowed});
+    }
+}
+
+// Each real case with JSON's non-finite strings ("NaN", "Infinity", "-Infinity") in place of
+// "$": exactly one error, on the case's field, saying "is not a finite number" and the range.
+inline void expect_json_non_finite_refused(const std::vector<FieldCase>& cases) {
+  for (const FieldCase& c : cases) {
+    if (!c.real) continue;
+    for (const std::string value : {"\"NaN\"", "\"Infinity\"", "\"-Infinity\""}) {
+      SCOPED_TRACE(c.field + " = " + value);
+      expect_one_error(errors_of(spec::parse_json, replace_value(c.json, value)), c.field,
+                       {"is not a finite number", c.allowed});
+    }
+  }
+}
+
 // Each real case with each of `values` (YAML's special floats) in place of "$", read as YAML:
 // exactly one error, on the case's field, saying "is not a finite number" and the allowed range.
 inline void expect_yaml_non_finite_refused(const std::vector<FieldCase>& cases,
