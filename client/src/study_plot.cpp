@@ -123,7 +123,7 @@ StudyPlotInfo render_study_plot(const StudyTable& t, const std::string& out_path
   plot << data.str() << "set logscale xy\nset format y '%.0e'\n"
        << "set xlabel "
        << gnuplot_quoted("wall time of the run (s); above the plot: each run's " + names(t)) << "\n"
-       << "set tmargin " << 5 + title_lines(t, left_out).size() << "\n"
+       << "set tmargin " << 7 + title_lines(t, left_out).size() << "\n"
        << "set ylabel 'relative error |f - f_ref| / |f_ref|'\n"
        << run_tics(t) << "set key outside below\n"
        << "set title " << dq(title_lines(t, left_out)) << " noenhanced font ',10'\n"
