@@ -309,6 +309,37 @@ TEST(TensileJob, CheckpointInsideEveryStageResumesBitIdentically) {
   expect_resume_identical(s, "tensile", 3);
 }
 
+TEST(TensileJob, CheckpointOfAnotherJobOrTruncatedIsRefused) {
+  TensileJobSpec s = tiny_spec();
+  std::string bytes;
+  {
+    TensileJob first(s, one_thread());
+    bool stop = false;
+    run(
+        first, [&] { return stop; },
+        [&](long) {
+          if (!stop && first.current_stage()->name() == "relax") {
+            bytes = save_checkpoint(first);
+            stop = true;
+          }
+        });
+  }
+  ASSERT_FALSE(bytes.empty());
+  // Other stages (NPs deposited after relaxation add two).
+  TensileJobSpec with_nps = s;
+  with_nps.nanoparticles = 2;
+  TensileJob other(with_nps, one_thread());
+  EXPECT_THROW(load_checkpoint(other, bytes), CheckpointError);
+  // Another film (5 tubes instead of 6): the same stages, other elements.
+  TensileJobSpec fewer_tubes = s;
+  fewer_tubes.film.tubes = 5;
+  TensileJob fewer(fewer_tubes, one_thread());
+  EXPECT_THROW(load_checkpoint(fewer, bytes), CheckpointError);
+  // Truncated bytes.
+  TensileJob same(s, one_thread());
+  EXPECT_THROW(load_checkpoint(same, bytes.substr(0, bytes.size() / 2)), CheckpointError);
+}
+
 TEST(TensileJob, SameSeedSameResultsOtherSeedOther) {
   TensileJob a(tiny_spec(), one_thread()), b(tiny_spec(), one_thread());
   run(a);
