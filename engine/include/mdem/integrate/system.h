@@ -194,6 +194,8 @@ class System {
   void update_kinetic();
   void check_finite_forces() const;
   void check_energy_growth();
+  // What a guard message says to change: dt when above the safe limit, else the real suspects.
+  std::string unstable_cause() const;
   void update_energy_scale();
   void start_ledger();  // the ledger's origin at the current state
 
