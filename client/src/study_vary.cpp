@@ -8,7 +8,10 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <set>
+
+#include "mdem/suggest.h"
 
 namespace mdem::cli {
 namespace {
@@ -63,32 +66,15 @@ std::map<std::string, std::string> name_table(const SpecKind& kind) {
   return names;
 }
 
-std::size_t edit_distance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diag = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      diag = up;
-    }
-  }
-  return row[b.size()];
-}
-
 std::string unknown_field(const SpecKind& kind, const std::string& name,
                           const std::map<std::string, std::string>& names) {
-  std::string closest;
-  std::size_t best = std::string::npos;
-  for (const auto& [n, path] : names)
-    if (const std::size_t d = edit_distance(name, n); d < best) best = d, closest = n;
+  std::vector<std::string> known;
+  for (const auto& [n, path] : names) known.push_back(n);
+  const std::optional<std::string> closest = closest_name(name, known);
   std::string list;
   for (const std::string& p : variable_fields(kind)) list += (list.empty() ? "" : ", ") + p;
   std::string msg = "--vary: '" + name + "' is not a numeric field of a " + kind.name + " spec";
-  if (!closest.empty() && best <= std::max<std::size_t>(2, name.size() / 3))
-    msg += " (did you mean '" + closest + "'?)";
+  if (closest) msg += " (did you mean '" + *closest + "'?)";
   return msg + " (allowed: " + list + ", by dotted path, own name or flag)";
 }
 
