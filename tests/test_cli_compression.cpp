@@ -93,7 +93,8 @@ TEST(CliCompression, HelpListsTheFlagsWithRangesAndDefaults) {
     EXPECT_TRUE(contains(r.out, part)) << part << "\n" << r.out;
   EXPECT_FALSE(contains(r.out, "--torque")) << "twist's flags belong to `mdem run twist`";
   // `mdem run --help` names the kind; `mdem submit compression --help` lists the same flags.
-  EXPECT_TRUE(contains(mdem_binary(d, {"run", "--help"}).out, "mdem run compression"));
+  const std::string kinds = mdem_binary(d, {"run", "--help"}).out;
+  EXPECT_TRUE(contains(kinds, "\n  compression  Crushes a nanocrystalline particle")) << kinds;
   const Result s = mdem_binary(d, {"submit", "compression", "--help"});
   EXPECT_EQ(s.code, 0);
   for (const char* part : {"Usage: mdem submit compression", "--outer-radius", "--no-unload",
