@@ -2,8 +2,8 @@
 // 11 nm, 8 NPs deposited after the relaxation) runs through every stage (pre-relaxation,
 // relaxation, deposit, NP pre-relaxation, tensile test), is killed -9 once it has checkpointed
 // inside its test, resumes from the checkpoint, and ends with the frames, snapshots and report of
-// an uninterrupted run, bit for bit. A spec out of range is refused at submit with the field and
-// its range.
+// an uninterrupted run, bit for bit; so does one killed in its relaxation. A spec out of range is
+// refused at submit with the field and its range.
 #include <gtest/gtest.h>
 
 #include "server_support.h"
@@ -51,16 +51,18 @@ std::vector<std::pair<long, std::string>> snapshot_sequence(const std::vector<Jo
   return out;
 }
 
-// The overall step (progress counts over all stages) at which the reference entered the test.
-long test_start_step(const std::vector<JobEvent>& ev) {
+// The overall step (progress counts over all stages) at which the reference entered a phase.
+long phase_start_step(const std::vector<JobEvent>& ev, std::initializer_list<std::string> phases) {
   for (const JobEvent& e : of_kind(ev, JobEvent::kProgress))
-    if (e.progress().phase() == "ramp" || e.progress().phase() == "straining")
-      return e.progress().step();
+    for (const std::string& p : phases)
+      if (e.progress().phase() == p) return e.progress().step();
   return -1;
 }
 
-TEST(ServerTensile, KillDashNineInTheTestResumesToIdenticalResults) {
-  DaemonProcess d(fresh_dir("kill9-tensile"), {"--checkpoint-every", "0.2"});
+// Runs a reference, then a victim killed -9 by its first checkpoint taken 200 steps into the
+// phase, and compares the resumed victim's log with the reference's.
+void kill_in_phase_and_compare(const std::string& dir, std::initializer_list<std::string> phases) {
+  DaemonProcess d(fresh_dir(dir), {"--checkpoint-every", "0.2"});
   const std::string ref = submit_ok(d, kAliceToken, "reference", tiny_film_spec());
   const JobInfo ref_info = wait_finished(d, ref, 300);
   ASSERT_EQ(ref_info.state(), mdem::v1::SUCCEEDED) << ref_info.reason();
@@ -74,12 +76,11 @@ TEST(ServerTensile, KillDashNineInTheTestResumesToIdenticalResults) {
   const double final_strain = report["summary"]["final_strain"].get<double>();
   EXPECT_GE(final_strain, 0.01 - 1e-9);
   EXPECT_LE(final_strain, 0.01 + 1.1e-3);
-  const long test_start = test_start_step(ref_ev);
-  ASSERT_GT(test_start, 0) << "no progress in the test's phases";
+  const long phase_start = phase_start_step(ref_ev, phases);
+  ASSERT_GE(phase_start, 0) << "no progress in the phase";
 
-  // The victim is killed by the first checkpoint taken 200 steps into the test.
   const std::string id = submit_ok(d, kAliceToken, "victim", tiny_film_spec());
-  wait_for(d, id, [&](const JobInfo& j) { return j.step() > test_start + 200; });
+  wait_for(d, id, [&](const JobInfo& j) { return j.step() > phase_start + 200; });
   const fs::path ckpt = checkpoint_path(d, id);
   std::error_code ec;
   const auto stamp = fs::last_write_time(ckpt, ec);
@@ -87,7 +88,7 @@ TEST(ServerTensile, KillDashNineInTheTestResumesToIdenticalResults) {
     std::error_code e2;
     return fs::last_write_time(ckpt, e2) != stamp;
   });
-  ASSERT_FALSE(finished(before.state())) << "the victim ended before a checkpoint in its test";
+  ASSERT_FALSE(finished(before.state())) << "the victim ended before a checkpoint in the phase";
   d.kill9();
   d.start();
   const JobInfo after = wait_finished(d, id, 300);
@@ -107,6 +108,16 @@ TEST(ServerTensile, KillDashNineInTheTestResumesToIdenticalResults) {
     EXPECT_TRUE(s[k] == s_ref[k]) << "snapshot event " << k << " differs";
   EXPECT_EQ(report_of(ev)["summary"], report["summary"]);
   EXPECT_EQ(report_of(ev)["accuracy"], report["accuracy"]);
+}
+
+TEST(ServerTensile, KillDashNineInTheTestResumesToIdenticalResults) {
+  kill_in_phase_and_compare("kill9-tensile", {"ramp", "straining"});
+}
+
+// Killed in the relaxation: the stages after it restart the clock (the deposit), so their frames
+// repeat the relaxation's steps and must still be logged after the resume.
+TEST(ServerTensile, KillDashNineInTheRelaxationResumesToIdenticalResults) {
+  kill_in_phase_and_compare("kill9-tensile-relax", {"relax"});
 }
 
 TEST(ServerTensile, SpecOutOfRangeIsRefusedAtSubmit) {

@@ -340,12 +340,12 @@ long JobStore::append_locked(const std::string& job_id, std::vector<v1::JobEvent
         r.columns_logged = true;
         break;
       case v1::JobEvent::kFrame:
-        r.last_frame_step = e.frame().step();
+        r.last_frame_step = event_order(e.frame().stage(), e.frame().step());
         r.step = std::max(r.step, e.frame().step());
         break;
       case v1::JobEvent::kSnapshot:
         if (e.snapshot().index() + 1 == e.snapshot().count())
-          r.last_snapshot_step = e.snapshot().step();
+          r.last_snapshot_step = event_order(e.snapshot().stage(), e.snapshot().step());
         break;
       case v1::JobEvent::kReport:
         r.report_json = e.report().json();

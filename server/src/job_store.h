@@ -18,6 +18,11 @@ struct LimitError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Where a frame or snapshot lies in a job's run: by stage, then by step inside it. Steps alone
+// do not order a job whose stages restart their clock (the tensile job after its
+// pre-relaxation); a log from before stages were recorded (stage 0) orders by step.
+inline long event_order(int stage, long step) { return (static_cast<long>(stage) << 40) + step; }
+
 struct JobRow {
   std::string id, user, request_id, kind, name;
   v1::JobSpec spec;  // finalized
@@ -29,6 +34,8 @@ struct JobRow {
   int resumes = 0;
   long checkpoint_step = 0;  // 0: no checkpoint
   double wall_s = 0;         // compute time up to the checkpoint
+  // The last frame and snapshot logged, as event_order(stage, step); the last progress step
+  // (progress counts steps over all stages).
   long last_frame_step = -1, last_snapshot_step = -1, last_progress_step = -1;
   bool columns_logged = false;
   std::string report_json;

@@ -34,7 +34,7 @@ v1::JobEvent report_event(const std::string& json) {
   return e;
 }
 
-std::vector<v1::JobEvent> snapshot_events(const Snapshot& s) {
+std::vector<v1::JobEvent> snapshot_events(const Snapshot& s, int stage) {
   std::string bytes;
   snapshot_to_proto(s).SerializeToString(&bytes);
   const std::size_t count =
@@ -47,6 +47,7 @@ std::vector<v1::JobEvent> snapshot_events(const Snapshot& s) {
     c->set_time_ps(s.time_ps);
     c->set_index(static_cast<int>(k));
     c->set_count(static_cast<int>(count));
+    c->set_stage(stage);
     c->set_data(bytes.substr(k * kChunkBytes, kChunkBytes));
     out.push_back(std::move(e));
   }
@@ -198,16 +199,21 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
     };
     JobObserver obs;
     obs.frame = [&](const SeriesFrame& f) {
-      if (f.step <= row.last_frame_step) return;  // logged before the restart
+      // Logged before the restart: frames are ordered by stage, then step (a job whose stages
+      // restart their clock, as the tensile job does after its pre-relaxation, repeats steps).
+      const int stage = static_cast<int>(job->stage_index());
+      if (event_order(stage, f.step) <= row.last_frame_step) return;
       v1::JobEvent e;
       e.mutable_frame()->set_step(f.step);
+      e.mutable_frame()->set_stage(stage);
       e.mutable_frame()->set_time_ps(f.time_ps);
       e.mutable_frame()->mutable_values()->Add(f.values.begin(), f.values.end());
       ch->push_droppable({std::move(e)}, f.step, false);
     };
     obs.snapshot = [&](const Snapshot& s) {
-      if (s.step <= row.last_snapshot_step) return;
-      ch->push_droppable(snapshot_events(s), s.step, true);
+      const int stage = static_cast<int>(job->stage_index());
+      if (event_order(stage, s.step) <= row.last_snapshot_step) return;
+      ch->push_droppable(snapshot_events(s, stage), s.step, true);
     };
     obs.progress = [&](const JobProgress& p) {
       // A job whose scene a stage builds (a compression job's packing) knows its step count
