@@ -214,6 +214,17 @@ TEST(KindRegistry, EveryDeclaredSummaryValueIsInTheJsonAndPrinted) {
                                 "--speed", "0.05", "--threads", "1", "--snapshot-every", "0"}));
 }
 
+// Reals print to the field's digits with its unit; a round-off zero prints as 0.
+TEST(KindRegistry, SummaryValuesPrintToTheirDigitsAndRoundOffAsZero) {
+  const SummaryField f{"x_nm", SummaryField::Type::Real, "nm", "x", 1, 4};
+  EXPECT_EQ(mdem::summary_value_text(f, 702.774102409747), "702.8 nm");
+  EXPECT_EQ(mdem::summary_value_text(f, 1.9e-13), "0 nm");
+  EXPECT_EQ(mdem::summary_value_text(f, -1.9e-13), "0 nm");
+  EXPECT_EQ(mdem::summary_value_text(f, 2.5e-6), "2.5e-06 nm");
+  const SummaryField n{"n", SummaryField::Type::Count, "", "n", 1};
+  EXPECT_EQ(mdem::summary_value_text(n, 7), "7");
+}
+
 TEST(JobState, OneEnumWithNamesAndFinality) {
   for (const v1::JobState s : {v1::QUEUED, v1::RUNNING, v1::SUCCEEDED, v1::FAILED, v1::CANCELLED})
     EXPECT_EQ(mdem::parse_job_state(mdem::job_state_name(s)), s);

@@ -40,7 +40,10 @@ std::string summary_value_text(const SummaryField& f, const nlohmann::ordered_js
   } else if (v.is_number_integer()) {
     text = std::to_string(v.get<long long>());
   } else if (v.is_number()) {
-    const double x = v.get<double>();
+    // A value below 1e-9 of its unit (1e-9 nm, deg, nN, GPa) is round-off of a zero (a residual
+    // of 1.9e-13 nm): printed as 0, not to `digits` digits of noise. The JSON keeps the number.
+    double x = v.get<double>();
+    if (std::abs(x) < 1e-9) x = 0;
     char buf[48];
     std::snprintf(buf, sizeof buf, "%.*g", f.digits, x);
     text = buf;
