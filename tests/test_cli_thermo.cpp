@@ -377,7 +377,10 @@ TEST(CliThermo, LoopTimingChargesEachSpanToItsSection) {
   t.leave(LoopTiming::kStore);
   t.enter(Event::Poll);
   t.leave(LoopTiming::kOther);
-  nap(50);  // a chunk of steps
+  nap(25);  // a chunk of steps that reports nothing
+  t.enter(Event::Poll);
+  t.leave(LoopTiming::kOther);
+  nap(25);  // a chunk of steps
   t.enter(Event::Progress);
   t.leave(LoopTiming::kTerminal);
   nap(10);  // a stage change

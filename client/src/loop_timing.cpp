@@ -22,10 +22,11 @@ void LoopTiming::charge(Section s) {
 
 void LoopTiming::enter(Event e) {
   // After the start or a poll the engine stepped (beginning a stage, initializing, and for a
-  // frame observing); between a frame and a snapshot the snapshot was captured; anything else
-  // is the loop's own.
+  // frame observing), also up to the next poll: a chunk of steps that reported nothing (on a
+  // large system most chunks end between frames); between a frame and a snapshot the snapshot
+  // was captured; anything else is the loop's own.
   Section s = kOther;
-  if (last_ == Event::Start || (last_ == Event::Poll && e != Event::Poll))
+  if (last_ == Event::Start || last_ == Event::Poll)
     s = kSteps;
   else if (last_ == Event::Frame && e == Event::Snapshot)
     s = kSnapshot;
