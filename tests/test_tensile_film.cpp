@@ -363,6 +363,10 @@ TEST(TensileFilm, PrerelaxationRemovesOverlapsAndSaysWhy) {
               sys.time(), why.c_str());
   EXPECT_TRUE(why.rfind("settled", 0) == 0 || why.rfind("cap of 50 ps", 0) == 0) << why;
   EXPECT_EQ(met, why.rfind("settled", 0) == 0);
+  // Every kind of pair the film has is named with its figure; none is infinite.
+  for (const char* name : {"CNT-CNT ", "NP-CNT ", "NP-NP "})
+    EXPECT_NE(why.find(name), std::string::npos) << why;
+  EXPECT_EQ(why.find("inf"), std::string::npos) << why;
 
   // No overlap, by brute force over every pair (not the neighbour lists the criterion read).
   const Elements& e = sys.elements();
@@ -399,4 +403,24 @@ TEST(TensileFilm, PrerelaxationRemovesOverlapsAndSaysWhy) {
   EXPECT_EQ(sys.energy().external_work, 0.0);
   EXPECT_EQ(sys.energy().dissipated, 0.0);
   EXPECT_NEAR(sys.energy().balance_residual(), 0.0, 1e-12);
+}
+
+TEST(TensileFilm, PrerelaxationReasonOfAPristineFilmNamesNoNpPairs) {
+  TensileFilmSpec spec;
+  spec.side = 60;
+  spec.tubes = 16;
+  spec.segments_per_tube = 40;
+  spec.seed = 21;
+  Elements el;
+  add_tensile_film(el, spec);
+  System sys(std::move(el), IntegratorSettings{});
+  sys.add(ParallelBond::from_topology(sys.elements(), BondType::Cnt, cnt_bond_stiffness()));
+  sys.add(std::make_unique<AnisotropicVdw>());
+  sys.initialize();
+  PrerelaxCriterion crit;
+  crit.met(sys);
+  const std::string why = crit.reason();
+  EXPECT_NE(why.find("CNT-CNT "), std::string::npos) << why;
+  EXPECT_EQ(why.find("NP-"), std::string::npos) << why;
+  EXPECT_EQ(why.find("inf"), std::string::npos) << why;
 }

@@ -96,10 +96,20 @@ std::string PrerelaxCriterion::reason() const {
   const PrerelaxStatus& s = last_;
   if (!s.checked) return "not checked yet";
   auto figures = [&] {
-    m << "smallest D: CNT-CNT " << s.min_cnt_cnt << " (limit " << limits_.cnt_cnt << "), NP-CNT "
-      << s.min_np_cnt << " (limit " << limits_.np_cnt << "), NP-NP " << s.min_np_np << " (limit "
-      << limits_.np_np << "); largest speed " << s.max_speed << " nm/ps (limit "
-      << limits_.max_speed << ")";
+    // A kind of pair the film does not have (no NPs: its smallest D is infinite) is not named.
+    auto pair = [&](const char* name, double d, double limit, bool first) {
+      if (!std::isfinite(d)) return;
+      m << (first ? "" : ", ") << name << " " << d << " (limit " << limit << ")";
+    };
+    m << "smallest D: ";
+    pair("CNT-CNT", s.min_cnt_cnt, limits_.cnt_cnt, true);
+    pair("NP-CNT", s.min_np_cnt, limits_.np_cnt, !std::isfinite(s.min_cnt_cnt));
+    pair("NP-NP", s.min_np_np, limits_.np_np,
+         !std::isfinite(s.min_cnt_cnt) && !std::isfinite(s.min_np_cnt));
+    if (!std::isfinite(s.min_cnt_cnt) && !std::isfinite(s.min_np_cnt) &&
+        !std::isfinite(s.min_np_np))
+      m << "no pair in reach";
+    m << "; largest speed " << s.max_speed << " nm/ps (limit " << limits_.max_speed << ")";
   };
   if (s.overlap_free && s.slow) {
     m << "settled: no pair on an overlap branch and nothing fast; ";
