@@ -3,7 +3,28 @@
 // library only (xml.etree, csv, struct, zlib and plain parsing of the extended-XYZ header). Run as
 // `python3 reader.py MODE PATH` (MODE xyz, pvd, vtp, csv or svg), it prints JSON of what it read.
 
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "support.h"
+
 namespace mdem::testing {
+
+// Runs `python script args...` (each quoted) and parses the JSON it prints; a failed run or
+// output that is not JSON fails the calling test.
+inline nlohmann::json run_reader(const std::string& python, const std::string& script,
+                                 const std::vector<std::string>& args) {
+  std::string cmd = python + " '" + script + "'";
+  for (const std::string& a : args) cmd += " '" + a + "'";
+  const CliResult r = run_shell(cmd + " 2>&1");
+  EXPECT_EQ(r.code, 0) << r.out;
+  nlohmann::json j = nlohmann::json::parse(r.out, nullptr, false);
+  EXPECT_FALSE(j.is_discarded()) << r.out;
+  return j;
+}
 
 // The independent reader: Python standard library only. Prints JSON of what it read.
 inline constexpr const char* kExportReader = R"py(

@@ -44,8 +44,6 @@ print(json.dumps([{'n': len(a), 'symbols': a.get_chemical_symbols(),
                    'step': int(a.info['Step']), 'time': float(a.info['Time'])} for a in frames]))
 )py";
 
-std::string quote(const std::string& s) { return "'" + s + "'"; }
-
 CliResult shell(const std::string& command) { return mdem::testing::run_shell(command + " 2>&1"); }
 
 // Relative agreement to 1e-12 (%.17g text and float64 binary are in fact exact).
@@ -104,13 +102,7 @@ class ExportJobsTest : public ::testing::Test {
 
   static json read_back(const std::string& python, const std::string& script,
                         const std::vector<std::string>& args) {
-    std::string cmd = python + " " + quote(file(script));
-    for (const std::string& a : args) cmd += " " + quote(a);
-    const CliResult r = shell(cmd);
-    EXPECT_EQ(r.code, 0) << r.out;
-    json j = json::parse(r.out, nullptr, false);
-    EXPECT_FALSE(j.is_discarded()) << r.out;
-    return j;
+    return mdem::testing::run_reader(python, file(script), args);
   }
 
   // `mdem export ID --format vtk --out pvd`, read back.

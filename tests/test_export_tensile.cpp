@@ -78,14 +78,6 @@ class ExportTensileTest : public ::testing::Test {
               mdem::cli::kOk)
         << e.str();
   }
-  static json read_back(const std::string& python, const std::string& script,
-                        const std::vector<std::string>& args) {
-    std::string cmd = python + " '" + script + "'";
-    for (const std::string& a : args) cmd += " '" + a + "'";
-    const mdem::testing::CliResult r = mdem::testing::run_shell(cmd + " 2>&1");
-    EXPECT_EQ(r.code, 0) << r.out;
-    return json::parse(r.out, nullptr, false);
-  }
   static std::vector<Snapshot> snapshots() { return mdem::cli::ResultsStore(db_).snapshots(id_); }
   static int count_kind(const Snapshot& s, std::int32_t kind) {
     int n = 0;
@@ -117,7 +109,7 @@ print(json.dumps([{'symbols': a.get_chemical_symbols(), 'radius': a.arrays['radi
                    'positions': a.positions.tolist()} for a in frames]))
 )py";
   export_to("xyz", file("film.xyz"));
-  const json frames = read_back(python, file("ase_reader.py"), {file("film.xyz")});
+  const json frames = mdem::testing::run_reader(python, file("ase_reader.py"), {file("film.xyz")});
   const std::vector<Snapshot> snaps = snapshots();
   ASSERT_GE(snaps.size(), 2u);
   ASSERT_EQ(frames.size(), snaps.size());
@@ -150,7 +142,8 @@ print(json.dumps([{'symbols': a.get_chemical_symbols(), 'radius': a.arrays['radi
 TEST_F(ExportTensileTest, VtkHoldsTubesAndNanoparticlesWithKindAndRadius) {
   ASSERT_FALSE(id_.empty());
   export_to("vtk", file("vtk/film.pvd"));
-  const json read = read_back("python3", file("reader.py"), {"pvd", file("vtk/film.pvd")});
+  const json read =
+      mdem::testing::run_reader("python3", file("reader.py"), {"pvd", file("vtk/film.pvd")});
   const std::vector<Snapshot> snaps = snapshots();
   const Snapshot& last = snaps.back();
   // The last snapshot's element file: its points are the elements in order.
