@@ -326,24 +326,32 @@ TEST(TensileFilm, BadInputNamesFieldAndRange) {
   bad([](TensileFilmSpec& s) { s.thickness = 1e-6; }, "contain");
 }
 
-TEST(TensileFilm, PrerelaxationRemovesOverlapsAndSaysWhy) {
-  // A 60 × 60 nm film, 16 tubes of 40 segments, 12 NPs: crossings overlap at the start.
+// A 60 × 60 nm film, 16 tubes of 40 segments (crossings overlap at the start) and `nps` NPs, with
+// its bonds and the contacts of the kinds it has, initialized.
+System small_overlapping_film(int nps, IntegratorSettings is) {
   TensileFilmSpec spec;
   spec.side = 60;
   spec.tubes = 16;
   spec.segments_per_tube = 40;
-  spec.nanoparticles = 12;
+  spec.nanoparticles = nps;
   spec.seed = 21;
   Elements el;
   add_tensile_film(el, spec);
-  IntegratorSettings is;
-  is.local_damping = 0.7;
   System sys(std::move(el), is);
   sys.add(ParallelBond::from_topology(sys.elements(), BondType::Cnt, cnt_bond_stiffness()));
   sys.add(std::make_unique<AnisotropicVdw>());
-  sys.add(std::make_unique<NpCntContact>());
-  sys.add(std::make_unique<NpNpContact>());
+  if (nps > 0) {
+    sys.add(std::make_unique<NpCntContact>());
+    sys.add(std::make_unique<NpNpContact>());
+  }
   sys.initialize();
+  return sys;
+}
+
+TEST(TensileFilm, PrerelaxationRemovesOverlapsAndSaysWhy) {
+  IntegratorSettings is;
+  is.local_damping = 0.7;
+  System sys = small_overlapping_film(12, is);
 
   auto crit = std::make_shared<PrerelaxCriterion>();
   const PrerelaxStatus start = crit->measure(sys);
@@ -406,17 +414,7 @@ TEST(TensileFilm, PrerelaxationRemovesOverlapsAndSaysWhy) {
 }
 
 TEST(TensileFilm, PrerelaxationReasonOfAPristineFilmNamesNoNpPairs) {
-  TensileFilmSpec spec;
-  spec.side = 60;
-  spec.tubes = 16;
-  spec.segments_per_tube = 40;
-  spec.seed = 21;
-  Elements el;
-  add_tensile_film(el, spec);
-  System sys(std::move(el), IntegratorSettings{});
-  sys.add(ParallelBond::from_topology(sys.elements(), BondType::Cnt, cnt_bond_stiffness()));
-  sys.add(std::make_unique<AnisotropicVdw>());
-  sys.initialize();
+  System sys = small_overlapping_film(0, IntegratorSettings{});
   PrerelaxCriterion crit;
   crit.met(sys);
   const std::string why = crit.reason();
