@@ -195,13 +195,20 @@ void expect_summary_declared_and_shown(const std::string& kind, const mdem::Repo
   for (const SummaryField& f : layout) {
     ASSERT_TRUE(summary.contains(f.key)) << f.key;
     const std::string shown = f.label + " " + mdem::summary_value_text(f, summary[f.key]);
-    EXPECT_NE(out.str().find(shown), std::string::npos) << shown << "\n" << out.str();
+    // Line 0: in the JSON only (the accuracy line says the energy balance and dt).
+    if (f.line != 0)
+      EXPECT_NE(out.str().find(shown), std::string::npos) << shown << "\n" << out.str();
     // Types as declared.
     if (f.type == SummaryField::Type::Label) EXPECT_TRUE(summary[f.key].is_string()) << f.key;
     if (f.type == SummaryField::Type::Count)
       EXPECT_TRUE(summary[f.key].is_number_integer()) << f.key;
     if (f.type == SummaryField::Type::Real) EXPECT_TRUE(summary[f.key].is_number()) << f.key;
   }
+  // The energy balance is said once.
+  const std::string text = out.str();
+  const std::size_t first = text.find("energy balance error");
+  ASSERT_NE(first, std::string::npos) << text;
+  EXPECT_EQ(text.find("energy balance error", first + 1), std::string::npos) << text;
 }
 
 TEST(KindRegistry, EveryDeclaredSummaryValueIsInTheJsonAndPrinted) {
@@ -327,6 +334,22 @@ TEST(JobId, TimeThenRandomHex) {
   EXPECT_EQ(ids.size(), 200u);
   EXPECT_THROW(mdem::new_job_id(0), std::invalid_argument);
   EXPECT_THROW(mdem::new_job_id(17), std::invalid_argument);
+}
+
+// The run's accuracy line prints the energy-balance error and dt; a kind's layout keeps them in the
+// JSON (line 0), so that the end block does not say them twice (a compression run did).
+TEST(KindRegistry, AccuracyFieldsAreJsonOnlyInEveryLayout) {
+  for (const mdem::JobKind& kind : mdem::job_kinds().all()) {
+    nlohmann::ordered_json summary = nlohmann::ordered_json::object();
+    for (const mdem::SummaryField& f : kind.summary) summary[f.key] = 1.0;
+    for (const mdem::SummaryField& f : kind.summary)
+      if (f.key == "energy_balance_error" || f.key == "dt_ps" || f.key == "critical_dt_ps")
+        EXPECT_EQ(f.line, 0) << kind.name << ": " << f.key;
+    const std::vector<std::string> lines = mdem::summary_lines(kind.summary, summary);
+    EXPECT_FALSE(lines.empty()) << kind.name;
+    for (const std::string& line : lines)
+      EXPECT_EQ(line.find("energy balance error"), std::string::npos) << kind.name << ": " << line;
+  }
 }
 
 }  // namespace

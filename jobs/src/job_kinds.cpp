@@ -58,7 +58,7 @@ std::vector<std::string> summary_lines(const SummaryLayout& layout,
   std::map<int, std::string> lines;
   if (!summary.is_object()) return {};
   for (const SummaryField& f : layout) {
-    if (!summary.contains(f.key)) continue;
+    if (f.line == 0 || !summary.contains(f.key)) continue;
     std::string& line = lines[f.line];
     line += (line.empty() ? "" : ", ") + f.label + " " + summary_value_text(f, summary[f.key]);
   }

@@ -24,7 +24,7 @@ struct SummaryField {
   Type type = Type::Real;
   std::string unit;        // as printed ("deg", "nN·nm"); "" for counts, labels and ratios
   std::string label;       // words for people ("twist angle")
-  int line = 0;            // the printer's line it goes on (1, 2, ...)
+  int line = 0;            // the printer's line it goes on (1, 2, ...); 0: in the JSON only
   int digits = 6;          // significant digits when printed (reals)
   bool highlight = false;  // shown in `mdem ls`
   // One of the kind's results: what a user reads off the job (a twist angle, a peak force), whose
