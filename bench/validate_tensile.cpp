@@ -5,7 +5,11 @@
 //                               options --psi LIST (dashpot ratios, default 0.03) --max-ps T;
 //   validate_tensile film       one tensile job on a film: --size small|medium|large or
 //                               --side L --tubes N --segments S; --nps N --relax-ps T
-//                               --target E --rate R --ramp T --seed K; prints the summary.
+//                               --target E --rate R --ramp T --seed K --report-strains LIST
+//                               --report-times LIST --dt PS (fixed; default: picked per stage);
+//                               cyclic with --cycles N --amplitude A --cyclic-rate R; prints the
+//                               summary and the wall time (bench/validate_tensile_films.sh runs
+//                               the validation set with it).
 //
 // --threads N for both.
 #include <omp.h>
@@ -93,9 +97,23 @@ int film(const std::vector<std::string>& args, IntegratorSettings is) {
       spec.monotonic.ramp_time = std::stod(v);
     else if (k == "--seed")
       spec.seed = std::stoull(v);
+    else if (k == "--cycles") {  // a cyclic test of this many cycles (mean rate --cyclic-rate)
+      spec.mode = TensileMode::Cyclic;
+      spec.cyclic.cycles = std::stoi(v);
+    } else if (k == "--amplitude")
+      spec.cyclic.amplitude = std::stod(v);
+    else if (k == "--cyclic-rate")
+      spec.cyclic.mean_rate = std::stod(v);
+    else if (k == "--report-strains")
+      spec.test_report_strains = list(v);
+    else if (k == "--report-times")
+      spec.relax_report_ps = list(v);
+    else if (k == "--dt")  // fixed for every stage (default: the job picks it per stage)
+      is.dt = std::stod(v);
     else
       throw std::invalid_argument("film: unknown option " + k);
   }
+  if (spec.mode == TensileMode::Cyclic) spec.test_report_strains.clear();
   const auto t0 = Clock::now();
   TensileJob job(spec, is);
   JobCadence c;

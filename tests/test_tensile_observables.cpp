@@ -14,6 +14,8 @@
 #include "mdem/core/cnt.h"
 #include "mdem/core/elements.h"
 #include "mdem/core/units.h"
+#include "mdem/integrate/system.h"
+#include "mdem/job/tensile_job.h"
 #include "mdem/observe/aligned_pairs.h"
 #include "mdem/observe/cycle_analysis.h"
 #include "mdem/observe/fragments.h"
@@ -22,6 +24,7 @@
 #include "mdem/observe/stress_strain.h"
 #include "mdem/observe/tube_tension.h"
 #include "mdem/observe/width_profile.h"
+#include "mdem/scene/nanoparticle.h"
 #include "mdem/scene/tube_builder.h"
 
 using namespace mdem;
@@ -568,6 +571,37 @@ TEST(Fragments, ComponentsOfAKnownGraph) {
   EXPECT_EQ(count_fragments(200, edges, 0.0).count, 11u);
   edges.emplace_back(3, 200);
   expect_invalid([&] { count_fragments(200, edges); }, "outside 0..199");
+}
+
+TEST(Fragments, FilmLinksOnlyAttractingPairs) {
+  // Two NPs 5.3 nm apart (gap 0.3 nm: inside the NP-NP cutoff of 8 nm, but on the repulsive
+  // branch, U > 0, as V = 0 at 5.35 nm, tensile.md §1.2) are two fragments; 6.0 nm apart (U < 0)
+  // one. A bonded 4-segment tube far from both is one more either way. Linking every pair within
+  // the cutoff (the criterion before) makes the two NPs one fragment at both distances.
+  for (const double r : {5.3, 6.0}) {
+    Elements el;
+    add_straight_tube(el, Vec3(0, 40, 0), Vec3::UnitX(), 4, 0);
+    el.add(nanoparticle(Vec3(0, 0, 0)));
+    el.add(nanoparticle(Vec3(r, 0, 0)));
+    IntegratorSettings is;
+    is.threads = 1;
+    const auto sys = tensile_film_system(std::move(el), is, 0.0);
+    sys->initialize();
+    const double u = sys->energy().potential.stored[static_cast<int>(EnergyTerm::NpNp)];
+    EXPECT_EQ(u > 0, r < 5.35) << "r = " << r << ": U = " << u;
+    const Fragments f = count_film_fragments(*sys, 0.0);
+    EXPECT_EQ(f.count, r < 5.35 ? 3u : 2u) << "r = " << r;
+    // The cutoff criterion: bonds plus the NP pair (4, 5), closer than 8 nm.
+    std::vector<Edge> within_cutoff = {{0, 1}, {1, 2}, {2, 3}, {4, 5}};
+    EXPECT_EQ(count_fragments(6, within_cutoff, 0.0).count, 2u);
+  }
+  // Before initialization there are no energies to link by.
+  Elements el;
+  el.add(nanoparticle(Vec3(0, 0, 0)));
+  IntegratorSettings is;
+  is.threads = 1;
+  const auto raw = tensile_film_system(std::move(el), is, 0.0);
+  EXPECT_THROW(film_fragment_edges(*raw), std::logic_error);
 }
 
 // ---------------------------------------------------------------------------------------------

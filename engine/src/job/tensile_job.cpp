@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -69,6 +70,9 @@ std::string_view np_deposit_name(NpDeposit d) {
 namespace {
 
 constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+// The job's step is this fraction of the auto step (safety × critical step) of the state it is
+// picked on: the margin covers the stiffening a stage's own motion brings.
+constexpr double kAutoDtFactor = 0.9;
 // The strain at which the fraction of tubes in tension is taken (§3.5), its averaging window (ps)
 // and the strains at which fragments are counted (§3.5 large strain).
 constexpr double kTensionStrain = 0.02;
@@ -141,6 +145,24 @@ PoreStats pores(const System& sys, const Window2D* window = nullptr) {
   return pore_stats(rasterize(frame, w));
 }
 
+// A monotonic test's curve ends at its target strain: the samples past it (the stage runs one
+// sampling interval on, so that the sampler records the loading's end) are dropped and the last
+// point is at the target, its stress linear between the samples either side. A curve that has
+// not reached the target (a run still going) is left as it is.
+void end_at_target(std::vector<double>& eps, std::vector<double>& sig, double target) {
+  const auto past = std::find_if(eps.begin(), eps.end(), [&](double e) { return e > target; });
+  if (past == eps.end() || past == eps.begin()) return;
+  const std::size_t k = static_cast<std::size_t>(past - eps.begin());
+  const double w = (target - eps[k - 1]) / (eps[k] - eps[k - 1]);
+  const double s = sig[k - 1] + w * (sig[k] - sig[k - 1]);
+  eps.resize(k);
+  sig.resize(k);
+  if (eps.back() < target) {
+    eps.push_back(target);
+    sig.push_back(s);
+  }
+}
+
 }  // namespace
 
 void TensileJobSpec::validate() const {
@@ -181,6 +203,7 @@ class TensileJob::Records final : public Stateful {
       w.put_string(p->reason);
       w.put(p->duration_ps);
       w.put(p->steps);
+      w.put(p->dt_after_ps);
     }
   }
   void load_state(StateReader& r) override {
@@ -190,6 +213,7 @@ class TensileJob::Records final : public Stateful {
       p->reason = r.get_string("prerelax reason");
       p->duration_ps = r.get<double>("prerelax duration");
       p->steps = r.get<long>("prerelax steps");
+      p->dt_after_ps = r.get<double>("prerelax dt after");
     }
   }
 };
@@ -394,23 +418,9 @@ class TensileJob::TestTracker final : public Updater {
     force_sum_.clear();
   }
 
-  // Components of the graph of bonds plus contact pairs within their model's cutoff (the pairs
-  // that attract: every contact law's tail is attractive out to its cutoff).
-  std::size_t count_fragments_now(const System& sys) const {
-    const Elements& el = sys.elements();
-    std::vector<Edge> edges;
-    for (const Bond& b : bonds(sys).bonds()) edges.emplace_back(b.i, b.j);
-    for (const auto& e : sys.pair_table().entries()) {
-      if (!e.list || e.owner->name().find("damping") != std::string_view::npos) continue;
-      const auto& off = e.list->offsets();
-      const auto& nb = e.list->neighbors();
-      const double rc2 = e.cutoff * e.cutoff;
-      for (std::size_t i = 0; i + 1 < off.size(); ++i)
-        for (std::uint32_t k = off[i]; k < off[i + 1]; ++k)
-          if ((el.x[nb[k]] - el.x[i]).squaredNorm() < rc2)
-            edges.emplace_back(static_cast<std::uint32_t>(i), nb[k]);
-    }
-    return count_fragments(el.size(), edges).count;
+  // Components of the graph of bonds plus attracting contact pairs (U < 0; §3.5).
+  static std::size_t count_fragments_now(const System& sys) {
+    return count_film_fragments(sys).count;
   }
 
   const TensileJob& job_;
@@ -468,6 +478,7 @@ class TensileJob::DepositStage final : public Stage {
     w.put(candidates);
     w.put(decided);
     w.put(overlaps);
+    w.put(dt);
   }
   void load_result(StateReader& r) override {
     r.begin("deposit result");
@@ -475,6 +486,8 @@ class TensileJob::DepositStage final : public Stage {
     candidates = r.get<long>("candidates");
     decided = r.get_bool("decided");
     overlaps = r.get_bool("overlaps");
+    dt = r.get<double>("dt");
+    if (!(std::isfinite(dt) && dt > 0)) r.fail("dt", "finite and > 0 ps");
     done_ = true;
   }
 
@@ -482,29 +495,40 @@ class TensileJob::DepositStage final : public Stage {
   long candidates = 0;
   bool decided = false;  // whether `overlaps` was measured on the system with the NPs
   bool overlaps = false;
+  double dt = 0;  // ps, the step picked for the film with the NPs (with `decided`)
 
  private:
   TensileJob& job_;
   bool done_ = false;
 };
 
-// A SystemStage that the job may skip before it begins (the pre-relaxation after an NP deposit
-// that left no overlap): it then ends at once, taking no step.
-class TensileJob::OptionalStage final : public Stage {
+// A pre-relaxation (the film's, or the one after an NP deposit): a SystemStage made when the
+// stage is installed, so that its cap in steps follows the job's step at that time. The job may
+// skip it before it begins (after a deposit that left no overlap): it then ends at once, taking
+// no step. Its result is the step the job picked at its end for the stages after it (0 until
+// picked): a live run's stage_finished picks it from the relaxed state, a checkpoint restores it
+// (the resumed job's film is then still the generated one, from which no step can be picked).
+class TensileJob::PrerelaxStage final : public Stage {
  public:
-  explicit OptionalStage(std::unique_ptr<SystemStage> s) : Stage(s->name()), s_(std::move(s)) {}
-  System& system() override { return s_->system(); }
-  void install() override { s_->install(); }
+  using Factory = std::function<std::unique_ptr<SystemStage>()>;
+  PrerelaxStage(const std::string& name, TensileJob& job, Factory make)
+      : Stage(name), job_(job), make_(std::move(make)) {}
+  System& system() override { return *job_.sys_; }
+  void install() override {
+    s_ = make_();
+    s_->install();
+  }
   void begin() override {
+    dt_after = 0;
     if (!skip) s_->begin();
   }
-  bool finished() const override { return skip || s_->finished(); }
+  bool finished() const override { return skip || (s_ && s_->finished()); }
   void advance(long n) override {
     if (!skip) s_->advance(n);
   }
-  long steps_done() const override { return skip ? 0 : s_->steps_done(); }
-  long planned_steps() const override { return skip ? 0 : s_->planned_steps(); }
-  std::string phase() const override { return s_->phase(); }
+  long steps_done() const override { return skip || !s_ ? 0 : s_->steps_done(); }
+  long planned_steps() const override { return skip || !s_ ? 0 : s_->planned_steps(); }
+  std::string phase() const override { return s_ ? s_->phase() : name(); }
   void save_state(StateWriter& w) const override {
     w.put(skip);
     s_->save_state(w);
@@ -513,9 +537,23 @@ class TensileJob::OptionalStage final : public Stage {
     skip = r.get_bool("skip");
     s_->load_state(r);
   }
+  void save_result(StateWriter& w) const override {
+    w.begin(name() + " result");
+    w.put(dt_after);
+  }
+  void load_result(StateReader& r) override {
+    r.begin(name() + " result");
+    dt_after = r.get<double>("dt after");
+    if (!(std::isfinite(dt_after) && dt_after >= 0))
+      r.fail("dt after", "finite and >= 0 ps (0: skipped)");
+  }
+
   bool skip = false;
+  double dt_after = 0;  // ps
 
  private:
+  TensileJob& job_;
+  Factory make_;
   std::unique_ptr<SystemStage> s_;
 };
 
@@ -534,16 +572,31 @@ TensileJob::TensileJob(Elements film, const TensileJobSpec& spec, IntegratorSett
   build(std::move(film));
 }
 
+double TensileJob::pick_dt(const Elements& el, const ParallelBond* rest) const {
+  if (!auto_dt_) return *settings_.dt;
+  IntegratorSettings probe_settings = settings_;
+  probe_settings.dt.reset();
+  const auto probe = tensile_film_system(el, probe_settings, spec_.dashpot_ratio, rest);
+  probe->initialize();
+  return kAutoDtFactor * probe->dt();
+}
+
+void TensileJob::rebuild(Elements el, double dt, const ParallelBond* rest) {
+  settings_.dt = dt;
+  sys_ = tensile_film_system(std::move(el), settings_, spec_.dashpot_ratio, rest);
+}
+
 void TensileJob::build(Elements el) {
-  if (!settings_.dt) {
-    // The auto step of the generated film less 10 %, fixed for every stage: later states check
-    // it against their own critical step, which rounding or stiffer contacts may lower a little.
-    const auto probe = tensile_film_system(el, settings_, spec_.dashpot_ratio);
-    probe->initialize();
-    settings_.dt = 0.9 * probe->dt();
+  auto_dt_ = !settings_.dt.has_value();
+  if (auto_dt_) {
+    // The job picks the step itself (pick_dt) from the state each stage starts from, and a
+    // checkpoint restores it: a resumed job's initialize() runs on the generated film before the
+    // checkpoint overwrites it, where a step picked on the relaxed film would be refused.
+    settings_.check_dt = false;
+    settings_.dt = pick_dt(el, nullptr);
   }
+  dt_start_ = *settings_.dt;
   sys_ = tensile_film_system(std::move(el), settings_, spec_.dashpot_ratio);
-  const double dt = *settings_.dt;
 
   records_ = std::make_shared<Records>();
   protocol_ = std::make_shared<TensileProtocol>(loading_of(spec_));
@@ -557,16 +610,21 @@ void TensileJob::build(Elements el) {
                                                   spec_.relax_count_every_ps);
   test_tracker_ = std::make_shared<TestTracker>(*this, spec_.test_report_strains);
 
+  // Each pre-relaxation's cap in steps follows the step in force when it is installed.
   auto prerelax_stage = [&](const std::string& name, std::shared_ptr<PrerelaxCriterion>& c) {
     c = std::make_shared<PrerelaxCriterion>(spec_.prerelax);
-    SystemStage::Settings st;
-    st.local_damping = spec_.prerelax_damping;
-    st.stop = PrerelaxCriterion::stop(c, dt);
-    return std::make_unique<SystemStage>(name, *this, std::move(st));
+    return std::make_unique<PrerelaxStage>(name, *this, [this, name, c] {
+      SystemStage::Settings st;
+      st.local_damping = spec_.prerelax_damping;
+      st.stop = PrerelaxCriterion::stop(c, *settings_.dt);
+      return std::make_unique<SystemStage>(name, *this, std::move(st));
+    });
   };
   prerelax_index_ = relax_index_ = deposit_index_ = np_prerelax_index_ = kNone;
   prerelax_index_ = stages().size();
-  add_stage(prerelax_stage("prerelax", prerelax_));
+  auto p = prerelax_stage("prerelax", prerelax_);
+  prerelax_stage_ = p.get();
+  add_stage(std::move(p));
   if (spec_.relax_ps > 0) {
     SystemStage::Settings st;
     st.local_damping = spec_.local_damping;
@@ -580,7 +638,7 @@ void TensileJob::build(Elements el) {
     deposit_ = d.get();
     deposit_index_ = stages().size();
     add_stage(std::move(d));
-    auto o = std::make_unique<OptionalStage>(prerelax_stage("np_prerelax", np_prerelax_));
+    auto o = prerelax_stage("np_prerelax", np_prerelax_);
     np_stage_ = o.get();
     np_prerelax_index_ = stages().size();
     add_stage(std::move(o));
@@ -589,9 +647,10 @@ void TensileJob::build(Elements el) {
   st.protocol = protocol_;
   st.local_damping = spec_.local_damping;
   st.observers = {sampler_, test_tracker_};
-  // One sampling interval (and a step) past the loading's end, so that the sampler, one
-  // evaluation behind, records the loading's last frame.
-  st.stop = StopCondition::after(protocol_->duration() + spec_.sample_every_ps + dt);
+  // One sampling interval (and at least one step: the pre-relaxation's step, no longer than the
+  // test's) past the loading's end, so that the sampler, one evaluation behind, records a frame
+  // past the loading's end (summary() ends the curve at the target strain).
+  st.stop = StopCondition::after(protocol_->duration() + spec_.sample_every_ps + dt_start_);
   test_index_ = stages().size();
   add_stage(std::make_unique<SystemStage>("tensile", *this, std::move(st)));
   add_state(records_);
@@ -605,25 +664,31 @@ TensileJob::~TensileJob() = default;
 void TensileJob::stage_finished(std::size_t k) {
   System& sys = *sys_;
   if (k == prerelax_index_ || k == np_prerelax_index_) {
+    PrerelaxStage& stage = k == prerelax_index_ ? *prerelax_stage_ : *np_stage_;
     PrerelaxRecord& rec = k == prerelax_index_ ? records_->prerelax : records_->np_prerelax;
-    const bool skipped = k == np_prerelax_index_ && np_stage_->skip;
+    const bool skipped = stage.skip;
     rec.ran = !skipped;
     rec.reason = skipped ? "skipped: the NP placement left no overlap"
                          : (k == prerelax_index_ ? prerelax_ : np_prerelax_)->reason();
     rec.duration_ps = skipped ? 0.0 : sys.time();
     rec.steps = skipped ? 0 : sys.steps();
     if (!skipped) {
-      zero_motion(sys.elements());
-      sys.restart_clock();
+      // The pre-relaxed film at rest, in a new system (clock, steps and energy ledger from 0)
+      // whose step is picked anew: the overlaps that set the first step are gone.
+      Elements el = sys.elements();
+      zero_motion(el);
+      if (stage.dt_after == 0) stage.dt_after = pick_dt(el, sys.find<ParallelBond>());
+      rebuild(std::move(el), stage.dt_after, sys.find<ParallelBond>());
+      rec.dt_after_ps = stage.dt_after;
     }
   }
   if (k == deposit_index_) {
     // The relaxed film (velocities kept) plus the NPs at rest, in a new system whose bonds keep
-    // the generated film's rest state.
+    // the generated film's rest state, at a step picked for it (NPs may overlap tubes).
     Elements el = sys.elements();
     for (const Vec3& x : deposit_->positions) el.add(nanoparticle(x));
-    sys_ = tensile_film_system(std::move(el), settings_, spec_.dashpot_ratio,
-                               sys.find<ParallelBond>());
+    if (!deposit_->decided) deposit_->dt = pick_dt(el, sys.find<ParallelBond>());
+    rebuild(std::move(el), deposit_->dt, sys.find<ParallelBond>());
     sys_->initialize();
     if (!deposit_->decided) {
       deposit_->overlaps = !np_prerelax_->measure(*sys_).overlap_free;
@@ -709,11 +774,13 @@ Summary TensileJob::summary() {
                {"tubes", static_cast<long>(fr.tubes)},
                {"pieces", static_cast<long>(fr.pieces)},
                {"density_g_cm3", fr.density},
-               {"porosity", fr.porosity},
-               {"np_deposit", std::string(np_deposit_name(spec_.np_deposit))},
-               {"prerelax_reason", records_->prerelax.reason},
-               {"prerelax_ps", records_->prerelax.duration_ps},
-               {"prerelax_steps", records_->prerelax.steps}};
+               {"porosity", fr.porosity}};
+  if (spec_.nanoparticles > 0 || fr.nanoparticles > 0)
+    s.emplace_back("np_deposit", std::string(np_deposit_name(spec_.np_deposit)));
+  s.emplace_back("prerelax_reason", records_->prerelax.reason);
+  s.emplace_back("prerelax_ps", records_->prerelax.duration_ps);
+  s.emplace_back("prerelax_steps", records_->prerelax.steps);
+  s.emplace_back("prerelax_dt_ps", dt_start_);
   if (deposit_after(spec_) && deposit_->finished()) {
     s.emplace_back("np_candidates", deposit_->candidates);
     s.emplace_back("np_prerelax_reason", records_->np_prerelax.reason);
@@ -730,8 +797,9 @@ Summary TensileJob::summary() {
     s.emplace_back("relax_pores_gt200nm2_end", rf.back().pores_large);
     s.emplace_back("relax_bending_share_end", rf.back().bending_share);
   }
-  const std::vector<double> eps = sampler_->strains(), sig = sampler_->stresses();
+  std::vector<double> eps = sampler_->strains(), sig = sampler_->stresses();
   if (spec_.mode == TensileMode::Monotonic && !eps.empty()) {
+    end_at_target(eps, sig, spec_.monotonic.target_strain);
     try {
       const LineFit fit = modulus_fit(eps, sig);
       s.emplace_back("youngs_modulus_GPa", fit.slope);

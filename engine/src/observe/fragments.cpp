@@ -5,6 +5,12 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "mdem/force/bond/parallel_bond.h"
+#include "mdem/force/contact/anisotropic_vdw.h"
+#include "mdem/force/contact/np_cnt_contact.h"
+#include "mdem/force/contact/np_np_contact.h"
+#include "mdem/integrate/system.h"
+
 namespace mdem {
 
 Fragments count_fragments(std::size_t n, std::span<const Edge> edges, double min_fraction) {
@@ -46,6 +52,56 @@ Fragments count_fragments(std::size_t n, std::span<const Edge> edges, double min
   std::sort(f.sizes.begin(), f.sizes.end(), std::greater<>());
   f.count = f.sizes.size();
   return f;
+}
+
+namespace {
+
+// The listed pairs of the system's pair model M with U < 0, by its own kernel (the one-pair
+// physics the forces come from), with the minimum-image displacement the driver uses.
+template <class M>
+void add_attracting_pairs(const System& sys, std::vector<Edge>& edges) {
+  const M* m = sys.find<M>();
+  if (!m) return;
+  const NeighborList* list = sys.neighbors(*m);
+  if (!list) return;
+  const Elements& el = sys.elements();
+  const auto& off = list->offsets();
+  const auto& nb = list->neighbors();
+  if (off.size() != el.size() + 1) return;
+  const auto& k = m->kernel();
+  // The kernel's per-evaluation cache (the vdW axes), as the force evaluation fills it.
+  if constexpr (requires { k.begin(el); }) k.begin(el);
+  if constexpr (requires { k.prepare(el, 0L); })
+    for (long i = 0; i < static_cast<long>(el.size()); ++i) k.prepare(el, i);
+  const bool filter = !list_is_for(*list, *m);
+  const Domain& domain = list->domain();
+  for (std::size_t i = 0; i < el.size(); ++i)
+    for (std::uint32_t p = off[i]; p < off[i + 1]; ++p) {
+      const std::size_t j = nb[p];
+      if (filter && (!m->kinds().has(el.kind[i], el.kind[j]) || k.excludes(el, i, j))) continue;
+      PairForces f;
+      if (k.pair(el, i, j, domain.delta(el.x[i], el.x[j]), f) && f.energy < 0)
+        edges.emplace_back(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j));
+    }
+}
+
+}  // namespace
+
+std::vector<Edge> film_fragment_edges(const System& sys) {
+  if (!sys.initialized())
+    throw std::logic_error("film_fragment_edges: the system was never initialized");
+  std::vector<Edge> edges;
+  if (const ParallelBond* b = sys.find<ParallelBond>())
+    for (const Bond& bond : b->bonds()) edges.emplace_back(bond.i, bond.j);
+  add_attracting_pairs<AnisotropicVdw>(sys, edges);
+  add_attracting_pairs<NpCntContact>(sys, edges);
+  add_attracting_pairs<NpNpContact>(sys, edges);
+  return edges;
+}
+
+Fragments count_film_fragments(const System& sys, double min_fraction) {
+  const std::vector<Edge> edges = film_fragment_edges(sys);
+  return count_fragments(sys.elements().size(), edges, min_fraction);
 }
 
 }  // namespace mdem

@@ -7,16 +7,17 @@
 //
 // Stages, in order (names as in progress lines and checkpoints):
 //   "prerelax"     local damping α (0.7) until PrerelaxCriterion holds or its cap (50 ps); then
-//                  every velocity and spin is zeroed and the clock, step count and energy ledger
-//                  restart at 0 (zero_motion, System::restart_clock). Its stop reason and
-//                  duration are reported.
+//                  every velocity and spin is zeroed and the film goes into a new system (clock,
+//                  step count and energy ledger from 0) at a step picked anew. Its stop reason,
+//                  duration and step are reported.
 //   "relax"        hands-off: contact dashpots ψ only (plus local_damping if > 0), relax_ps long;
 //                  left out when relax_ps = 0 (the ready-to-relax variant, Table 5-3).
 //   "deposit"      only for nanoparticles > 0 with np_deposit = AfterRelax: the NPs are placed in
 //                  the relaxed film (place_nanoparticles, the film's NP stream); the tubes keep
 //                  their velocities, the NPs start at rest.
 //   "np_prerelax"  after "deposit": the pre-relaxation again, run only when the placement left a
-//                  pair on an overlap branch (otherwise it ends at once, taking no step).
+//                  pair on an overlap branch (otherwise it ends at once, taking no step); when
+//                  run, a new system at rest and a step picked anew after it, as after "prerelax".
 //   "tensile"      grips selected at the stage's start (select_grips, width grip_width), then the
 //                  TensileProtocol: monotonic (ramp, constant rate, to target_strain) or cyclic.
 // With np_deposit = BeforeRelax the NPs are part of the generated film and pre-relaxed with it.
@@ -118,6 +119,7 @@ struct PrerelaxRecord {
   std::string reason;  // PrerelaxCriterion::reason() at its end
   double duration_ps = 0;
   long steps = 0;
+  double dt_after_ps = 0;  // the step picked for the stages after it (0 when skipped)
 };
 
 // The relaxation's records at relax_report_ps.
@@ -141,10 +143,13 @@ struct StrainFrame {
 class TensileJob final : public Job {
  public:
   // Validates the spec, generates the film (quick: no dynamics) and sets up the stages. The time
-  // step: settings.dt if given, else 0.9 × the auto step (safety × critical) of the generated
-  // film, fixed for every stage so the grips' motion law is integrated exactly. The test stage
-  // runs one sampling interval past the loading's end (the sampler lags one evaluation). Throws
-  // std::invalid_argument for a bad spec or a film whose NPs do not fit.
+  // step: settings.dt if given, for every stage; else the job picks 0.9 × the auto step (safety
+  // × critical) of the state each run of stages starts from — the generated film (pre-
+  // relaxation), the pre-relaxed film (relaxation, test), the film with its deposited NPs
+  // (np_prerelax) and the NP-pre-relaxed film (test) — fixed within a stage so the grips' motion
+  // law is integrated exactly. A picked step is a stage result, restored from checkpoints. The
+  // test stage runs one sampling interval past the loading's end (the sampler lags one
+  // evaluation). Throws std::invalid_argument for a bad spec or a film whose NPs do not fit.
   TensileJob(const TensileJobSpec& spec, IntegratorSettings settings);
   // The same on a film built by the caller (e.g. straight tubes for an analytic check): `film`
   // holds its CNT segments, bonded along their chains in film.topology, and any NPs. Of
@@ -170,8 +175,10 @@ class TensileJob final : public Job {
   // tension at 2 %, mid-length width shrinkage at the end, aligned pairs and pores > 200 nm² at
   // the test's start and end, peak stress, and for target strains ≥ 50 % toughness (GJ/m³),
   // failure strain and fragments; cyclic — per cycle k (1-based keys cycle_k_...) loop area
-  // (J/cm³), modulus (GPa) and phase lead (fraction of P). Figures a short run cannot give (no
-  // frame in the 1–2 % window, no yield) are left out of the summary.
+  // (J/cm³), modulus (GPa) and phase lead (fraction of P). A monotonic curve ends at the target
+  // strain (frames past it dropped, the stress at it interpolated: final_strain is the target).
+  // np_deposit only for a film with NPs. Figures a short run cannot give (no frame in the 1–2 %
+  // window, no yield) are left out of the summary.
   Summary summary() override;
 
   const TensileJobSpec& spec() const { return spec_; }
@@ -192,9 +199,14 @@ class TensileJob final : public Job {
   class RelaxTracker;
   class TestTracker;
   class DepositStage;
-  class OptionalStage;
+  class PrerelaxStage;
   void stage_finished(std::size_t k) override;
   void build(Elements el);  // the system from the film, then the stages
+  // The step for a system on `el` (bonds at rest as in `rest`, or el's own): the caller's fixed
+  // dt, else 0.9 × the auto step of that state.
+  double pick_dt(const Elements& el, const ParallelBond* rest) const;
+  // sys_ replaced by a new system on `el` at step dt (bonds at rest as in `rest`).
+  void rebuild(Elements el, double dt, const ParallelBond* rest);
 
   TensileJobSpec spec_;
   IntegratorSettings settings_;
@@ -206,8 +218,11 @@ class TensileJob final : public Job {
   std::shared_ptr<RelaxTracker> relax_tracker_;
   std::shared_ptr<TestTracker> test_tracker_;
   std::shared_ptr<PrerelaxCriterion> prerelax_, np_prerelax_;
-  DepositStage* deposit_ = nullptr;    // owned by the stage list; null without one
-  OptionalStage* np_stage_ = nullptr;  // likewise
+  DepositStage* deposit_ = nullptr;          // owned by the stage list; null without one
+  PrerelaxStage* prerelax_stage_ = nullptr;  // likewise, never null after build
+  PrerelaxStage* np_stage_ = nullptr;        // null without a deposit
+  bool auto_dt_ = true;                      // the caller gave no dt: the job picks it
+  double dt_start_ = 0;                      // ps, the pre-relaxation's step
   std::size_t prerelax_index_ = 0, relax_index_ = 0, deposit_index_ = 0, np_prerelax_index_ = 0,
               test_index_ = 0;  // stage positions (npos-like: stages().size() when absent)
 };

@@ -22,4 +22,14 @@ struct Fragments {
 // Throws std::invalid_argument for an edge naming an element ≥ n, or min_fraction outside [0, 1].
 Fragments count_fragments(std::size_t n, std::span<const Edge> edges, double min_fraction = 0.01);
 
+class System;
+
+// The edges of a film's fragment graph (tensile.md §3.5): its parallel bonds, and the pairs of its
+// CNT–CNT vdW, NP–CNT and NP–NP contacts whose energy is below zero (attracting; a pair within
+// the cutoff on the repulsive branch, U ≥ 0, is no link) in the system's last neighbour lists.
+// The system must be initialized.
+std::vector<Edge> film_fragment_edges(const System& sys);
+// count_fragments over film_fragment_edges.
+Fragments count_film_fragments(const System& sys, double min_fraction = 0.01);
+
 }  // namespace mdem
