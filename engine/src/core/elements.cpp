@@ -1,5 +1,8 @@
 #include "mdem/core/elements.h"
 
+#include <algorithm>
+#include <limits>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 
@@ -22,6 +25,13 @@ std::size_t Elements::add(const ElementInit& e) {
           "must be finite and > 0 about every principal axis");
   require(std::isfinite(e.radius) && e.radius > 0, "radius", "must be finite and > 0");
 
+  if (x.size() >= std::numeric_limits<std::uint32_t>::max())
+    throw std::length_error("elements: more than 2^32 - 1 elements");
+  if (next_tag >= std::numeric_limits<std::uint32_t>::max())
+    throw std::length_error("elements: tags beyond 2^32 - 1");
+  if (index_of_tag_.size() < next_tag)
+    index_of_tag_.resize(next_tag, std::numeric_limits<std::uint32_t>::max());
+  index_of_tag_.push_back(static_cast<std::uint32_t>(x.size()));
   tag.push_back(next_tag++);
   x.push_back(e.x);
   q.push_back(e.q.normalized());
@@ -47,12 +57,83 @@ std::size_t Elements::add(const ElementInit& e) {
 }
 
 std::size_t Elements::index_of(std::uint64_t t) const {
-  // Elements not reordered since they were built sit at their tag; otherwise search.
-  if (t < tag.size() && tag[t] == t) return static_cast<std::size_t>(t);
+  if (t < index_of_tag_.size()) {
+    const std::size_t i = index_of_tag_[t];
+    if (i < tag.size() && tag[i] == t) return i;
+  }
+  // The map is stale only after a hand edit of `tag`: search the arrays themselves.
   for (std::size_t i = 0; i < tag.size(); ++i)
     if (tag[i] == t) return i;
   throw std::out_of_range("no element has tag " + std::to_string(t) + " (" +
                           std::to_string(tag.size()) + " elements)");
+}
+
+bool is_permutation_of(std::span<const std::uint32_t> new_to_old, std::size_t n) {
+  if (new_to_old.size() != n) return false;
+  std::vector<char> seen(n, 0);
+  for (std::uint32_t i : new_to_old) {
+    if (i >= n || seen[i]) return false;
+    seen[i] = 1;
+  }
+  return true;
+}
+
+bool is_identity_order(std::span<const std::uint32_t> new_to_old) {
+  for (std::size_t k = 0; k < new_to_old.size(); ++k)
+    if (new_to_old[k] != k) return false;
+  return true;
+}
+
+std::vector<std::uint32_t> invert_permutation(std::span<const std::uint32_t> new_to_old) {
+  std::vector<std::uint32_t> old_to_new(new_to_old.size());
+  for (std::size_t k = 0; k < new_to_old.size(); ++k)
+    old_to_new[new_to_old[k]] = static_cast<std::uint32_t>(k);
+  return old_to_new;
+}
+
+void Elements::reorder(std::span<const std::uint32_t> new_to_old) {
+  if (!is_permutation_of(new_to_old, size()))
+    throw std::invalid_argument("elements: a reordering must list each of the " +
+                                std::to_string(size()) + " element indices exactly once");
+  permute(tag, new_to_old);
+  permute(x, new_to_old);
+  permute(q, new_to_old);
+  permute(v, new_to_old);
+  permute(w, new_to_old);
+  permute(mass, new_to_old);
+  permute(inv_mass, new_to_old);
+  permute(inertia, new_to_old);
+  permute(radius, new_to_old);
+  permute(kind, new_to_old);
+  permute(tube, new_to_old);
+  permute(index, new_to_old);
+  permute(dof, new_to_old);
+  permute(v_prescribed, new_to_old);
+  permute(w_prescribed, new_to_old);
+  permute(f_ext, new_to_old);
+  permute(t_ext, new_to_old);
+  permute(f, new_to_old);
+  permute(t, new_to_old);
+  for (std::size_t k = 0; k < tag.size(); ++k)
+    if (tag[k] < index_of_tag_.size()) index_of_tag_[tag[k]] = static_cast<std::uint32_t>(k);
+}
+
+std::vector<std::uint32_t> Elements::tag_order() const {
+  // Tags are 0 .. next_tag-1 without gaps (add() gives them): O(n) through the map.
+  if (next_tag == size()) {
+    std::vector<std::uint32_t> order(size());
+    bool mapped = true;
+    for (std::uint64_t t = 0; t < next_tag && mapped; ++t) {
+      order[t] = t < index_of_tag_.size() ? index_of_tag_[t] : 0;
+      mapped = order[t] < size() && tag[order[t]] == t;
+    }
+    if (mapped) return order;
+  }
+  std::vector<std::uint32_t> order(size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::stable_sort(order.begin(), order.end(),
+                   [this](std::uint32_t a, std::uint32_t b) { return tag[a] < tag[b]; });
+  return order;
 }
 
 std::vector<std::size_t> Elements::group_indices(std::string_view name) const {

@@ -5,6 +5,9 @@
 #include <array>
 #include <cstdint>
 #include <cstdlib>
+#include <span>
+#include <stdexcept>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -81,8 +84,19 @@ struct Elements {
   // velocity.
   std::size_t add(const ElementInit& e);
 
-  // Current index of the element tagged `tag`. Throws std::out_of_range for an unknown tag.
+  // Current index of the element tagged `tag`: O(1) through a tag -> index map that add() and
+  // reorder() keep; should a caller have edited `tag` by hand, it falls back to a search, so the
+  // answer is always that of the arrays. Throws std::out_of_range for an unknown tag.
   std::size_t index_of(std::uint64_t tag) const;
+
+  // Reorders the elements (memory order only: every per-element array moves, tags with their
+  // elements, so groups and topology, which hold tags, are unaffected): the element at index
+  // new_to_old[k] moves to index k. Throws std::invalid_argument, changing nothing, unless
+  // new_to_old is a permutation of 0 .. size()-1.
+  void reorder(std::span<const std::uint32_t> new_to_old);
+  // The indices of the elements in ascending tag order (the order outputs and checkpoints are
+  // written in); the identity for elements never reordered.
+  std::vector<std::uint32_t> tag_order() const;
   // Current indices of a group's elements, in tag order. Throws std::invalid_argument naming the
   // known groups when there is no group `name`.
   std::vector<std::size_t> group_indices(std::string_view name) const;
@@ -109,6 +123,29 @@ struct Elements {
     const int ring = topology.ring_length(tube[i]);
     return ring > 0 && ring - d < exclusion;
   }
+
+ private:
+  // index_of_tag_[t]: the index of the element tagged t (tags are 0 .. next_tag-1, dense).
+  std::vector<std::uint32_t> index_of_tag_;
 };
+
+// Whether new_to_old is a permutation of 0 .. n-1 (what Elements::reorder accepts).
+bool is_permutation_of(std::span<const std::uint32_t> new_to_old, std::size_t n);
+// Whether the reordering leaves every element in place.
+bool is_identity_order(std::span<const std::uint32_t> new_to_old);
+// old_to_new of a reordering given as new_to_old (a permutation): old_to_new[new_to_old[k]] = k.
+std::vector<std::uint32_t> invert_permutation(std::span<const std::uint32_t> new_to_old);
+// Applies a reordering to one per-element array: a[k] becomes the old a[new_to_old[k]]. Throws
+// std::invalid_argument when the sizes differ.
+template <class T>
+void permute(std::vector<T>& a, std::span<const std::uint32_t> new_to_old) {
+  if (a.size() != new_to_old.size())
+    throw std::invalid_argument("permute: array of " + std::to_string(a.size()) +
+                                " entries, reordering of " + std::to_string(new_to_old.size()));
+  std::vector<T> out;
+  out.reserve(a.size());
+  for (std::uint32_t i : new_to_old) out.push_back(std::move(a[i]));
+  a = std::move(out);
+}
 
 }  // namespace mdem
