@@ -6,9 +6,12 @@
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <map>
 #include <memory>
+#include <numeric>
+#include <random>
 
 #include "mdem/core/units.h"
 #include "mdem/force/bond/parallel_bond.h"
@@ -406,6 +409,59 @@ BENCHMARK(BM_TensileMediumFilm)
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond)
     ->Iterations(2);
+
+// Memory order (issue 13 item 3): full steps of issue 13's films as generated, their elements in
+// the generator's order (tube after tube, segments in order along each; the tubes themselves lie
+// at random places, so tube order is already spatially random) or shuffled element by element
+// (scrambled:1, a scene built in no spatial order at all), with the elements kept as built
+// (order:0) or reordered along a Morton curve at neighbour-list rebuilds (order:1, the first build
+// and every memory_order_every-th). As generated (overlapping tubes, auto step ~5 fs) under the
+// pre-relaxation's local damping 0.7, so no 500-step relaxation is needed first: short enough for
+// callgrind (`--collect-atstart=no --toggle-collect='mdem::System::run(long)'`).
+void BM_MemoryOrderFilmSteps(benchmark::State& state) {
+  const int threads = static_cast<int>(state.range(0));
+  const bool dense = state.range(1) != 0, scrambled = state.range(2) != 0;
+  const auto order = state.range(3) ? MemoryOrder::Morton : MemoryOrder::AsBuilt;
+  Elements el;
+  add_random_film(el, issue13_film(dense));
+  if (scrambled) {
+    std::vector<std::uint32_t> p(el.size());
+    std::iota(p.begin(), p.end(), 0u);
+    std::mt19937_64 rng(5);
+    std::shuffle(p.begin(), p.end(), rng);
+    el.reorder(p);
+  }
+  IntegratorSettings set;
+  set.threads = threads;
+  set.local_damping = 0.7;
+  set.memory_order = order;
+  auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
+  System sys(std::move(el), set);
+  sys.add(std::move(bonds));
+  sys.add(std::make_unique<AnisotropicVdw>());
+  sys.initialize();
+  sys.run(5);  // warm-up: buffers sized, the first reorder done
+  const long steps0 = sys.steps();
+  const std::size_t builds0 = sys.neighbors()->builds(), reorders0 = sys.reorders();
+  const StepTimers t0 = sys.timers();
+  for (auto _ : state) sys.run(10);
+  const double steps = static_cast<double>(sys.steps() - steps0);
+  const double n = static_cast<double>(sys.elements().size());
+  state.counters["element_steps_per_s"] =
+      benchmark::Counter(n * steps, benchmark::Counter::kIsRate);
+  add_phase_counters(state, t0, sys.timers(), steps);
+  state.counters["rebuilds_per_step"] =
+      static_cast<double>(sys.neighbors()->builds() - builds0) / steps;
+  state.counters["reorders_per_step"] = static_cast<double>(sys.reorders() - reorders0) / steps;
+  state.counters["pairs_per_element"] = static_cast<double>(sys.neighbors()->pair_count()) / n;
+  state.counters["dt_fs"] = sys.dt() * 1e3;
+}
+BENCHMARK(BM_MemoryOrderFilmSteps)
+    ->ArgNames({"threads", "dense", "scrambled", "order"})
+    ->ArgsProduct({{1, 2}, {1, 0}, {0, 1}, {0, 1}})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3);
 
 // The neighbour-list build alone on the (unrelaxed) film, with the vdW model's exclusion.
 void BM_FilmNeighborBuild(benchmark::State& state) {

@@ -44,6 +44,7 @@ std::string summary_value_text(const SummaryField& f, const nlohmann::ordered_js
     // of 1.9e-13 nm): printed as 0, not to `digits` digits of noise. The JSON keeps the number.
     double x = v.get<double>();
     if (std::abs(x) < 1e-9) x = 0;
+    x *= f.scale;
     char buf[48];
     std::snprintf(buf, sizeof buf, "%.*g", f.digits, x);
     text = buf;

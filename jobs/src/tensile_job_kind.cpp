@@ -7,6 +7,7 @@
 #include "mdem/job_kinds.h"
 #include "mdem/spec.h"
 #include "mdem/spec_job.h"
+#include "mdem/spec_rules.h"
 
 namespace mdem {
 
@@ -91,17 +92,18 @@ JobKind tensile_job_kind() {
       {"tubes", T::Count, "", "tubes", 1, 6, false},
       {"pieces", T::Count, "", "pieces", 1, 6, false},
       {"density_g_cm3", T::Real, "g/cm³", "density", 1, 4, false},
-      {"porosity", T::Real, "", "porosity", 1, 4, false},
+      {"porosity", T::Real, "%", "porosity", 1, 4, false, false, 100},
       {"np_deposit", T::Label, "", "NPs deposited", 2, 6, false},
       {"np_candidates", T::Count, "", "NP candidates", 2, 6, false},
       {"prerelax_reason", T::Label, "", "pre-relaxation:", 3, 6, false},
       {"prerelax_ps", T::Real, "ps", "after", 3, 6, false},
       {"prerelax_steps", T::Count, "", "steps", 3, 6, false},
+      {"prerelax_dt_ps", T::Real, "ps", "dt", 3, 4, false},
       {"np_prerelax_reason", T::Label, "", "after the NPs:", 4, 6, false},
       {"np_prerelax_ps", T::Real, "ps", "after", 4, 6, false},
       {"relax_ps", T::Real, "ps", "relaxation", 5, 6, false},
       {"relax_stabilisation_ps", T::Real, "ps", "stabilised after", 5, 6, false, true},
-      {"relax_bending_share_end", T::Real, "", "bending share", 5, 4, false},
+      {"relax_bending_share_end", T::Real, "%", "bending share", 5, 3, false, false, 100},
       {"relax_aligned_registry_free_start", T::Count, "", "aligned pairs (registry-free) from", 6,
        6, false},
       {"relax_aligned_registry_free_end", T::Count, "", "to", 6, 6, false},
@@ -111,12 +113,13 @@ JobKind tensile_job_kind() {
       {"relax_pores_gt200nm2_end", T::Count, "", "to", 6, 6, false},
       {"youngs_modulus_GPa", T::Real, "GPa", "Young's modulus", 7, 6, true, true},
       {"modulus_intercept_GPa", T::Real, "GPa", "intercept", 7, 6, false},
-      {"yield_strain", T::Real, "", "yield strain", 7, 6, false, true},
+      {"yield_strain", T::Real, "%", "yield strain", 7, 4, false, true, 100},
       {"peak_stress_GPa", T::Real, "GPa", "peak stress", 7, 6, true, true},
-      {"final_strain", T::Real, "", "final strain", 7, 6, false},
-      {"tubes_in_tension_at_2pct", T::Real, "", "tubes in tension at 2 %", 8, 4, false, true},
-      {"parents_in_tension_at_2pct", T::Real, "", "parent tubes", 8, 4, false},
-      {"mid_width_shrinkage_end", T::Real, "", "width shrinkage at the end", 8, 4, false, true},
+      {"final_strain", T::Real, "%", "final strain", 7, 6, false, false, 100},
+      {"tubes_in_tension_at_2pct", T::Real, "%", "tubes in tension at 2 %", 8, 3, false, true, 100},
+      {"parents_in_tension_at_2pct", T::Real, "%", "parent tubes", 8, 3, false, false, 100},
+      {"mid_width_shrinkage_end", T::Real, "%", "width shrinkage at the end", 8, 3, false, true,
+       100},
       {"aligned_registry_free_test_start", T::Count, "", "test: aligned pairs (registry-free) from",
        9, 6, false},
       {"aligned_registry_free_test_end", T::Count, "", "to", 9, 6, false},
@@ -125,13 +128,26 @@ JobKind tensile_job_kind() {
       {"pores_gt200nm2_test_start", T::Count, "", "pores > 200 nm² from", 9, 6, false},
       {"pores_gt200nm2_test_last_report", T::Count, "", "to", 9, 6, false},
       {"toughness_GJ_m3", T::Real, "GJ/m³", "toughness", 10, 6, false, true},
-      {"failure_strain", T::Real, "", "failure strain", 10, 6, false, true},
+      {"failure_strain", T::Real, "%", "failure strain", 10, 4, false, true, 100},
       {"cycles_complete", T::Count, "", "cycles complete", 11, 6, false},
       // Printed by the run's accuracy line; kept in the JSON.
       {"energy_balance_error", T::Real, "", "energy balance error", 0, 6, false},
       {"dt_ps", T::Real, "ps", "dt", 0, 6, false},
-      {"simulated_ps", T::Real, "ps", "simulated", 12, 6, false},
   };
+  // A cyclic test's figures, one line per cycle (cycle_k_*, k from 1, as many as a test can
+  // have), then the run's own line.
+  constexpr int kCycleLine = 12;
+  const int max_cycles = static_cast<int>(spec::ranges::kCycles.hi);
+  for (int c = 1; c <= max_cycles; ++c) {
+    const std::string key = "cycle_" + std::to_string(c) + "_";
+    k.summary.push_back({key + "loop_area_J_cm3", T::Real, "J/cm³",
+                         "cycle " + std::to_string(c) + ": loop area", kCycleLine + c, 4, false});
+    k.summary.push_back({key + "modulus_GPa", T::Real, "GPa", "modulus", kCycleLine + c, 4, false});
+    k.summary.push_back({key + "phase_lead", T::Real, "% of the period", "phase lead",
+                         kCycleLine + c, 3, false, false, 100});
+  }
+  k.summary.push_back(
+      {"simulated_ps", T::Real, "ps", "simulated", kCycleLine + max_cycles + 1, 6, false});
   // The stress-strain curve: the engine's strain column is a fraction, drawn in percent.
   k.plot = {{"stress_GPa"}, "strain", 100.0, "strain (%)"};
   return k;

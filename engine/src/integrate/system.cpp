@@ -254,6 +254,7 @@ void System::initialize() {
   } catch (const std::invalid_argument& e) {
     bad(e.what());
   }
+  check_memory_order();
 
   const std::size_t n = el_.size();
   sink_.resize(n, threads_, model_damping);
@@ -322,7 +323,7 @@ void System::refresh_booking_work() {
 void System::compute_forces(bool with_local_damping, StepTimers* timers) {
   Clock::time_point mark;
   if (timers) mark = Clock::now();
-  pairs_.update(el_);
+  update_pairs();
   if (timers) lap(mark, timers->neighbor_s);
   sink_.clear();
   for (const auto& m : models_)
@@ -414,6 +415,7 @@ std::string System::unstable_cause() const {
 
 void System::run(long nsteps) {
   if (!initialized_) initialize();
+  check_memory_order();  // a stage may have installed updaters since
   omp_set_num_threads(threads_);
   const double dt = dt_, h = 0.5 * dt_;
   const long n = static_cast<long>(el_.size());

@@ -21,39 +21,51 @@ void expect_same(StateReader& r, const std::vector<T>& have, std::string_view fi
     r.fail(field, "differs from this job's elements (the checkpoint is of another scene)");
 }
 
+// The elements' arrays in tag order (whatever their memory order, so a checkpoint reads the same
+// with and without reordering; tags first, so one of other elements is named by them), then their
+// memory order: the tags in the order the arrays are held, which a resumed run restores.
 void save_elements(StateWriter& w, const Elements& el) {
   w.begin("elements");
   w.put(static_cast<std::uint64_t>(el.size()));
+  const std::vector<std::uint32_t> order = el.tag_order();
+  auto put = [&](const auto& a) {
+    auto in_tag_order = a;
+    permute(in_tag_order, order);
+    w.put(in_tag_order);
+  };
+  put(el.tag);
   // State, loads and DOF modes (protocols change these), forces of the last evaluation.
-  w.put(el.x);
-  w.put(el.q);
-  w.put(el.v);
-  w.put(el.w);
-  w.put(el.dof);
-  w.put(el.v_prescribed);
-  w.put(el.w_prescribed);
-  w.put(el.f_ext);
-  w.put(el.t_ext);
-  w.put(el.f);
-  w.put(el.t);
+  put(el.x);
+  put(el.q);
+  put(el.v);
+  put(el.w);
+  put(el.dof);
+  put(el.v_prescribed);
+  put(el.w_prescribed);
+  put(el.f_ext);
+  put(el.t_ext);
+  put(el.f);
+  put(el.t);
   // Properties, to check against the job's.
-  w.put(el.mass);
-  w.put(el.inv_mass);
-  w.put(el.inertia);
-  w.put(el.radius);
-  w.put(el.kind);
-  w.put(el.tube);
-  w.put(el.index);
-  w.put(el.tag);
+  put(el.mass);
+  put(el.inv_mass);
+  put(el.inertia);
+  put(el.radius);
+  put(el.kind);
+  put(el.tube);
+  put(el.index);
+  w.put(el.tag);  // the memory order
 }
 
-void load_elements(StateReader& r, Elements& el) {
+// Loads into el, which must be in tag order; returns the saved memory order (tags), unchecked.
+std::vector<std::uint64_t> load_elements(StateReader& r, Elements& el) {
   r.begin("elements");
   const std::size_t n = el.size();
   const auto saved_n = r.get<std::uint64_t>("element count");
   if (saved_n != n)
     r.fail({}, "checkpoint holds " + std::to_string(saved_n) + " elements, this job builds " +
                    std::to_string(n));
+  expect_same(r, el.tag, "tag");
   r.get(el.x, "x", n);
   r.get(el.q, "q", n);
   r.get(el.v, "v", n);
@@ -76,7 +88,25 @@ void load_elements(StateReader& r, Elements& el) {
   expect_same(r, el.kind, "kind");
   expect_same(r, el.tube, "tube");
   expect_same(r, el.index, "index");
-  expect_same(r, el.tag, "tag");
+  std::vector<std::uint64_t> memory;
+  r.get(memory, "memory order", n);
+  return memory;
+}
+
+// The reordering (new_to_old) that puts el, in tag order, into the saved memory order; fails
+// unless that order names each of el's tags once.
+std::vector<std::uint32_t> saved_order(StateReader& r, const Elements& el,
+                                       const std::vector<std::uint64_t>& memory) {
+  std::vector<std::uint32_t> new_to_old(memory.size());
+  for (std::size_t k = 0; k < memory.size(); ++k) {
+    if (memory[k] >= el.next_tag)
+      r.fail("memory order",
+             "names tag " + std::to_string(memory[k]) + ", which no element of this job holds");
+    new_to_old[k] = static_cast<std::uint32_t>(el.index_of(memory[k]));
+  }
+  if (!is_permutation_of(new_to_old, el.size()))
+    r.fail("memory order", "names an element twice (it must list each element once)");
+  return new_to_old;
 }
 
 // Topology and groups are saved whole and loaded in place of the job's: a resumed job has the
@@ -240,7 +270,15 @@ void System::load_state(StateReader& r) {
   energy_scale_ = r.get<double>("energy_scale");
   initial_kinetic_ = r.get<double>("initial_kinetic");
   initial_stored_ = r.get<double>("initial_stored");
-  load_elements(r, el_);
+  // Elements come in tag order: put this system's in tag order (initialize may have reordered
+  // them), load, then restore the memory order the checkpoint was written in.
+  if (const std::vector<std::uint32_t> order = el_.tag_order(); !is_identity_order(order))
+    reorder_elements(order);
+  const std::vector<std::uint32_t> memory = saved_order(r, el_, load_elements(r, el_));
+  if (!is_identity_order(memory)) {
+    if (const std::string why = reorder_blocker(); !why.empty()) r.fail("memory order", why);
+    reorder_elements(memory);
+  }
   load_topology(r, el_);
   load_groups(r, el_);
   load_ledger(r, ledger_);

@@ -1,5 +1,6 @@
 #include "mdem/neighbor/pair_table.h"
 
+#include <algorithm>
 #include <sstream>
 #include <stdexcept>
 
@@ -94,9 +95,29 @@ std::vector<const PairTable::Entry*> PairTable::lookup(ElementKind a, ElementKin
   return out;
 }
 
-void PairTable::update(const Elements& el) {
-  for (auto& e : entries_)
-    if (e.list->needs_rebuild(el)) e.list->build(el);
+void PairTable::update(const Elements& el, const std::function<bool()>& before_rebuild) {
+  if (entries_.empty()) return;
+  if (entries_.size() == 1 && !before_rebuild) {  // the common case: one test, no flags
+    if (entries_.front().list->needs_rebuild(el)) entries_.front().list->build(el);
+    return;
+  }
+  std::vector<char> stale(entries_.size());
+  bool any = false;
+  for (std::size_t k = 0; k < entries_.size(); ++k)
+    any |= (stale[k] = entries_[k].list->needs_rebuild(el));
+  if (any && before_rebuild && before_rebuild()) std::fill(stale.begin(), stale.end(), 1);
+  for (std::size_t k = 0; k < entries_.size(); ++k)
+    if (stale[k]) entries_[k].list->build(el);
+}
+
+void PairTable::invalidate() {
+  for (auto& e : entries_) e.list->invalidate();
+}
+
+double PairTable::max_range() const {
+  double r = 0;
+  for (const auto& e : entries_) r = std::max(r, e.list->cutoff() + e.list->skin());
+  return r;
 }
 
 std::string PairTable::describe() const {

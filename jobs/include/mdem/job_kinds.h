@@ -30,6 +30,8 @@ struct SummaryField {
   // One of the kind's results: what a user reads off the job (a twist angle, a peak force), whose
   // error a study (`mdem study`) measures against its reference. Reals and counts only.
   bool result = false;
+  // Printed as value × scale (100: a fraction printed in %, unit "%"); the JSON keeps the value.
+  double scale = 1.0;
 };
 using SummaryLayout = std::vector<SummaryField>;
 

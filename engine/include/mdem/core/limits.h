@@ -12,4 +12,8 @@ inline constexpr int kMaxThreads = 256;
 // damping term's own stability limit, dt < 1 / (ratio x omega), would undercut it.
 inline constexpr double kMaxDashpotRatio = 1.0;
 
+// Neighbour-list rebuilds between two reorderings of the elements along a space-filling curve
+// (IntegratorSettings::memory_order_every).
+inline constexpr int kMaxReorderEvery = 1000000;
+
 }  // namespace mdem::limits

@@ -16,6 +16,7 @@
 #include "mdem/core/domain.h"
 #include "mdem/core/elements.h"
 #include "mdem/core/energy.h"
+#include "mdem/core/index_holder.h"
 #include "mdem/neighbor/kind_pairs.h"
 
 namespace mdem {
@@ -75,9 +76,10 @@ struct StiffnessSums {
   }
 };
 
-class ForceModel {
+// A model that holds element indices between evaluations remaps them when the system reorders
+// its elements (ElementIndexHolder, core/index_holder.h).
+class ForceModel : public ElementIndexHolder {
  public:
-  virtual ~ForceModel() = default;
   virtual std::string_view name() const = 0;
 
   // > 0: the model acts on element pairs closer than this (nm) and is handed its neighbour

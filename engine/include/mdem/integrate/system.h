@@ -16,6 +16,7 @@
 #include "mdem/force/force_model.h"
 #include "mdem/integrate/step_timers.h"
 #include "mdem/io/state_io.h"
+#include "mdem/neighbor/memory_order.h"
 #include "mdem/neighbor/neighbor_list.h"
 #include "mdem/neighbor/pair_table.h"
 
@@ -27,8 +28,9 @@ class System;
 
 // What acts on a system before each force evaluation: a protocol (loads, prescribed motion) or
 // an observer that samples every step. It saves and loads the state a run changes in it (none
-// by default); its owner (a job's stage) puts that in checkpoints.
-class Updater : public Stateful {
+// by default); its owner (a job's stage) puts that in checkpoints. One that holds element indices
+// remaps them when the system reorders its elements (ElementIndexHolder).
+class Updater : public Stateful, public ElementIndexHolder {
  public:
   virtual void apply(System& sys, double time) = 0;
   void save_state(StateWriter&) const override {}
@@ -57,6 +59,16 @@ struct IntegratorSettings {
   double safety = 0.6;         // fraction of the critical step that is safe
   double local_damping = 0.0;  // PFC local damping α in [0, 1)
   double skin = 0.5;           // neighbour-list skin (nm)
+  // Memory order of the elements (neighbor/memory_order.h): Morton reorders them along a Morton
+  // curve over the neighbour search's cells at neighbour-list rebuilds. Every model
+  // and updater must follow a reordering (ElementIndexHolder), else initialize and run throw
+  // ConfigError naming the one that does not. Tags stay with their elements.
+  MemoryOrder memory_order = MemoryOrder::AsBuilt;
+  // Rebuilds of the (first) neighbour sub-list from one reordering to the next, in
+  // [1, limits::kMaxReorderEvery]: the first build reorders, then every this many. Elements move
+  // at most half the skin between rebuilds, so the order decays slowly, and a reordering costs
+  // about as much as a rebuild.
+  int memory_order_every = 10;
   int threads = 0;             // 0: OpenMP's default
   // Run guard.
   int guard_every = 100;  // steps between energy-balance checks
@@ -144,6 +156,15 @@ class System {
   double max_safe_dt() const { return settings_.safety * dt_critical_; }
   int threads() const { return threads_; }
 
+  // Reorders the elements (new_to_old, as Elements::reorder) and remaps every index the system,
+  // its models and updaters hold; the neighbour sub-lists are rebuilt at the next evaluation.
+  // Throws ConfigError, changing nothing, when a model or updater does not follow a reordering,
+  // and std::invalid_argument when new_to_old is not a permutation of the elements.
+  void reorder_elements(std::span<const std::uint32_t> new_to_old);
+  // Reorderings done since the system was made (memory_order Morton: at the first neighbour-list
+  // build, then at every memory_order_every-th; plus any reorder_elements call).
+  std::size_t reorders() const { return reorders_; }
+
   // Wall time of run()'s parts since the system was made (step_timers.h).
   const StepTimers& timers() const { return timers_; }
 
@@ -191,6 +212,15 @@ class System {
   // local damping to the caller's own pass over the elements (run()'s second half kick). With
   // timers, the neighbour-list update and the force evaluation are timed into them.
   void compute_forces(bool with_local_damping = true, StepTimers* timers = nullptr);
+  // Memory order (system_order.cpp). update_pairs: the pair table's update, reordering the
+  // elements along the curve of settings_.memory_order first when a sub-list is stale.
+  void update_pairs();
+  // True when the reordering along the curve changed the order (all sub-lists are then rebuilt).
+  bool reorder_along_curve();
+  // Throws ConfigError for an unknown memory_order, or one that a model or updater cannot follow.
+  void check_memory_order() const;
+  // What stops a reordering ("force model 'x' does not follow ..."), empty when nothing does.
+  std::string reorder_blocker() const;
   void update_kinetic();
   void check_finite_forces() const;
   void check_energy_growth();
@@ -216,6 +246,7 @@ class System {
   double initial_kinetic_ = 0, initial_stored_ = 0;
   double time_ = 0, dt_ = 0, dt_critical_ = 0;
   long steps_ = 0;
+  std::size_t reorders_ = 0;
   int threads_ = 1;
   bool initialized_ = false;
   bool dissipative_ = false;

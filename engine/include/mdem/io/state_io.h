@@ -134,7 +134,8 @@ class StateReader {
 // 3: element tags (checked against the job's, like the other element properties).
 // 4: the energy ledger's nanoparticle term split into NP–CNT and NP–NP (one more stored term).
 // 5: the elements' topology (bonds, tube chains, rings) and groups, loaded in place of the job's.
-inline constexpr std::uint32_t kCheckpointVersion = 5;
+// 7: element arrays in tag order (tags first), then their memory order (memory_order.h).
+inline constexpr std::uint32_t kCheckpointVersion = 7;
 
 // A part of a job that a run changes and a checkpoint must carry (a protocol, an observer, a
 // stage): it writes and reads its own state, so no job lists fields in a checkpoint by hand.

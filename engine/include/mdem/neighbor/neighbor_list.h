@@ -40,6 +40,9 @@ class NeighborList {
 
   // True when the list must be rebuilt before it can be trusted for el's current positions.
   bool needs_rebuild(const Elements& el) const;
+  // The list no longer matches the elements (they were reordered): needs_rebuild is true until
+  // the next build.
+  void invalidate() { x_at_build_.clear(); }
   // Builds the list (threaded over cells). Throws std::runtime_error on non-finite positions.
   void build(const Elements& el);
 

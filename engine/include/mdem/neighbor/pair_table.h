@@ -8,6 +8,7 @@
 // contact) does not enlarge another model's list. A model that belongs to another's pairs (a
 // contact's dashpot, ForceModel::pair_owner()) joins that model's entry and acts on exactly its
 // pairs. All sub-lists share the system's domain and skin.
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -39,8 +40,14 @@ class PairTable {
   const NeighborList* list_of(const ForceModel* m) const;
   // The entries acting on the kind pair (a, b), in model order.
   std::vector<const Entry*> lookup(ElementKind a, ElementKind b) const;
-  // Rebuilds the sub-lists that el's motion has made stale.
-  void update(const Elements& el);
+  // Rebuilds the sub-lists that el's motion has made stale. before_rebuild, when given, runs first
+  // whenever some sub-list is stale; when it returns true (it reordered the elements), every
+  // sub-list is rebuilt.
+  void update(const Elements& el, const std::function<bool()>& before_rebuild = {});
+  // Every sub-list is rebuilt at the next update (the elements were reordered).
+  void invalidate();
+  // The largest cutoff + skin of the sub-lists (the cell width of a memory order); 0 when empty.
+  double max_range() const;
   // "CntSegment-CntSegment: anisotropic_vdw + viscous_contact_damping, cutoff 5.424 nm; ..."
   std::string describe() const;
 

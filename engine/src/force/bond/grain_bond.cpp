@@ -145,6 +145,21 @@ std::size_t GrainBond::add(const Elements& el, std::uint32_t i, std::uint32_t j)
   return bonds_.size() - 1;
 }
 
+void GrainBond::reorder(std::span<const std::uint32_t> old_to_new) {
+  for (GrainBondRecord& r : bonds_) {
+    r.bond.i = old_to_new[r.bond.i];
+    r.bond.j = old_to_new[r.bond.j];
+  }
+  // Partner lists grow only as far as the largest bonded index: extend to every element first.
+  partners_.resize(old_to_new.size());
+  std::vector<std::vector<std::uint32_t>> moved(old_to_new.size());
+  for (std::size_t i = 0; i < partners_.size(); ++i) {
+    for (std::uint32_t& j : partners_[i]) j = old_to_new[j];
+    moved[old_to_new[i]] = std::move(partners_[i]);
+  }
+  partners_ = std::move(moved);
+}
+
 bool GrainBond::owns(std::size_t i, std::size_t j) const {
   if (i >= partners_.size()) return false;
   const auto& p = partners_[i];

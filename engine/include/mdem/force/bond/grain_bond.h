@@ -71,6 +71,9 @@ class GrainBond final : public ForceModel {
                      StiffnessSums& s) const override;
   void save_state(StateWriter& w) const override;
   void load_state(StateReader& r) override;
+  // The bonds' element indices and the per-element partner lists follow a reordering.
+  bool follows_reorder() const override { return true; }
+  void reorder(std::span<const std::uint32_t> old_to_new) override;
 
   // Bonds i and j in their current configuration (the rest state). Returns the bond's index.
   // Throws std::invalid_argument for i == j, coincident centres or a pair already bonded.
@@ -139,6 +142,9 @@ class GrainDashpots final : public ForceModel {
   KindPairs kinds() const override { return contacts_.kinds(); }
   std::string_view pair_owner() const override { return contacts_.owner(); }
   bool dissipative() const override { return true; }
+  // Holds no indices: the platens are found afresh at every evaluation, the bonds are the bond
+  // model's.
+  bool follows_reorder() const override { return true; }
   bool excludes(const Elements& el, std::size_t i, std::size_t j) const override {
     return contacts_.excludes(el, i, j);
   }

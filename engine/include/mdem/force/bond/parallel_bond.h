@@ -96,6 +96,10 @@ class ParallelBond final : public ForceModel {
   void add(const Bond& b) { bonds_.push_back(b); }
   const std::vector<Bond>& bonds() const { return bonds_; }
   std::vector<Bond>& bonds() { return bonds_; }
+  // Each bond's two element indices follow a reordering, and the bonds are then sorted by their
+  // elements' new indices (lower, then higher).
+  bool follows_reorder() const override { return true; }
+  void reorder(std::span<const std::uint32_t> old_to_new) override;
   void compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const override;
   void add_stiffness(const Elements& el, const NeighborList* pairs,
                      StiffnessSums& s) const override;

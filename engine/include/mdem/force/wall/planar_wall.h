@@ -17,6 +17,8 @@ class PlanarWallContact final : public ForceModel {
  public:
   explicit PlanarWallContact(double youngs);
   std::string_view name() const override { return "planar_wall_contact"; }
+  // Holds no element indices (platens found afresh at every evaluation).
+  bool follows_reorder() const override { return true; }
   void compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const override;
   void add_stiffness(const Elements& el, const NeighborList* pairs,
                      StiffnessSums& s) const override;

@@ -15,6 +15,8 @@ class SphericalWallContact final : public ForceModel {
   // r_inner = 0: no inner wall (a full sphere).
   SphericalWallContact(const Vec3& centre, double r_outer, double r_inner, double youngs);
   std::string_view name() const override { return "spherical_wall_contact"; }
+  // Holds no element indices (parameters only).
+  bool follows_reorder() const override { return true; }
   void compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const override;
   void add_stiffness(const Elements& el, const NeighborList* pairs,
                      StiffnessSums& s) const override;
