@@ -1,3 +1,4 @@
+#include "mdem/core/capacity_bytes.h"
 #include "mdem/force/force_model.h"
 
 namespace mdem {
@@ -60,6 +61,15 @@ EnergyTally ForceSink::reduce(std::vector<Vec3>& f, std::vector<Vec3>& t, std::v
   EnergyTally total;
   for (const auto& e : energy_) total += e;
   return total;
+}
+
+}  // namespace mdem
+
+namespace mdem {
+
+std::size_t ForceSink::memory_bytes() const {
+  return capacity_bytes(force_) + capacity_bytes(torque_) + capacity_bytes(damp_force_) +
+         capacity_bytes(damp_torque_) + capacity_bytes(energy_);
 }
 
 }  // namespace mdem

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "mdem/core/capacity_bytes.h"
 #include "mdem/force/force_model.h"
 #include "mdem/io/state_io.h"
 
@@ -377,6 +378,16 @@ void NeighborList::load_state(StateReader& r, std::size_t n) {
   x_at_build_ = std::move(x);
   offsets_ = std::move(offsets);
   neighbors_ = std::move(neighbors);
+}
+
+}  // namespace mdem
+
+namespace mdem {
+
+std::size_t NeighborList::memory_bytes() const {
+  return capacity_bytes(x_at_build_) + capacity_bytes(offsets_) + capacity_bytes(neighbors_) +
+         capacity_bytes(cell_of_) + capacity_bytes(cell_start_) + capacity_bytes(cell_elem_) +
+         capacity_bytes(cell_x_) + capacity_bytes(thread_neighbors_) + capacity_bytes(chunk_pos_);
 }
 
 }  // namespace mdem

@@ -48,6 +48,8 @@ class ForceSink {
   // overwriting them, and returns the summed energy tally.
   EnergyTally reduce(std::vector<Vec3>& f, std::vector<Vec3>& t, std::vector<Vec3>& fd,
                      std::vector<Vec3>& td) const;
+  // Bytes its buffers hold (capacities, every thread's).
+  std::size_t memory_bytes() const;
 
  private:
   std::vector<std::vector<Vec3>> force_, torque_, damp_force_, damp_torque_;
@@ -123,5 +125,8 @@ class ForceModel : public ElementIndexHolder {
 };
 
 using ForceModelPtr = std::unique_ptr<ForceModel>;
+  // Bytes of the model's own per-element or per-pair data (bonds, cached axes; capacities), for
+  // System::memory_bytes; 0 for a model that holds only parameters.
+  virtual std::size_t memory_bytes() const { return 0; }
 
 }  // namespace mdem

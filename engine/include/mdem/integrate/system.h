@@ -168,6 +168,12 @@ class System {
   // Wall time of run()'s parts since the system was made (step_timers.h).
   const StepTimers& timers() const { return timers_; }
 
+  // Bytes the system's data holds now (container capacities): the element arrays, the force
+  // buffers (per thread), the neighbour lists and each model's own data (bonds; ForceModel::
+  // memory_bytes). Shared objects (the domain, groups, topology) and the heap's overhead are not
+  // counted. O(models + lists), no pass over the elements: cheap enough to sample at every poll.
+  std::size_t memory_bytes() const;
+
   const EnergyLedger& energy() const { return ledger_; }
   // |W_ext − (ΔE + E_diss)| over the energy in play: the largest of the initial kinetic energy,
   // the work put in, the energy dissipated and the stored energy released.

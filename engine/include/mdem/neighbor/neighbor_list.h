@@ -62,6 +62,8 @@ class NeighborList {
   // cutoff and skin and that the list is well-formed for n_elements (throws CheckpointError).
   void save_state(StateWriter& w) const;
   void load_state(StateReader& r, std::size_t n_elements);
+  // Bytes the list and its build scratch hold (capacities).
+  std::size_t memory_bytes() const;
 
  private:
   double cutoff_, skin_;

@@ -69,6 +69,9 @@ class GrainBond final : public ForceModel {
   void compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const override;
   void add_stiffness(const Elements& el, const NeighborList* pairs,
                      StiffnessSums& s) const override;
+  std::size_t memory_bytes() const override {
+    return capacity_bytes(bonds_) + capacity_bytes(partners_);
+  }
   void save_state(StateWriter& w) const override;
   void load_state(StateReader& r) override;
   // The bonds' element indices and the per-element partner lists follow a reordering.

@@ -13,6 +13,7 @@
 #include <memory>
 #include <vector>
 
+#include "mdem/core/capacity_bytes.h"
 #include "mdem/force/force_model.h"
 
 namespace mdem {
@@ -103,6 +104,7 @@ class ParallelBond final : public ForceModel {
   void compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const override;
   void add_stiffness(const Elements& el, const NeighborList* pairs,
                      StiffnessSums& s) const override;
+  std::size_t memory_bytes() const override { return capacity_bytes(bonds_); }
 
  private:
   std::vector<Bond> bonds_;
