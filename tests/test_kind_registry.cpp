@@ -233,15 +233,18 @@ TEST(KindRegistry, SummaryValuesPrintToTheirDigitsAndRoundOffAsZero) {
 }
 
 TEST(JobState, OneEnumWithNamesAndFinality) {
-  for (const v1::JobState s : {v1::QUEUED, v1::RUNNING, v1::SUCCEEDED, v1::FAILED, v1::CANCELLED})
+  for (const v1::JobState s :
+       {v1::QUEUED, v1::RUNNING, v1::SUCCEEDED, v1::FAILED, v1::CANCELLED, v1::TIMEOUT})
     EXPECT_EQ(mdem::parse_job_state(mdem::job_state_name(s)), s);
   EXPECT_EQ(mdem::job_state_name(v1::JOB_STATE_UNSPECIFIED), "QUEUED");
   EXPECT_FALSE(mdem::parse_job_state("DONE").has_value());
   EXPECT_FALSE(mdem::parse_job_state("succeeded").has_value());
   std::set<std::string> final_states;
-  for (const char* n : {"QUEUED", "RUNNING", "SUCCEEDED", "FAILED", "CANCELLED", "BOGUS"})
+  for (const char* n :
+       {"QUEUED", "RUNNING", "SUCCEEDED", "FAILED", "CANCELLED", "TIMEOUT", "BOGUS"})
     if (mdem::is_final(std::string_view(n))) final_states.insert(n);
-  EXPECT_EQ(final_states, (std::set<std::string>{"SUCCEEDED", "FAILED", "CANCELLED"}));
+  // TIMEOUT has ended too (a ResumeJob may queue it again): a watch stops at it.
+  EXPECT_EQ(final_states, (std::set<std::string>{"SUCCEEDED", "FAILED", "CANCELLED", "TIMEOUT"}));
 }
 
 // ---- ranges in flag help are the validation ranges (issue 12 item 8) ----

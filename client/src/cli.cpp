@@ -15,7 +15,7 @@
 namespace mdem::cli {
 namespace {
 
-const std::vector<std::string> kCommands = {"run",  "submit", "watch", "cancel", "ls",
+const std::vector<std::string> kCommands = {"run",  "submit", "watch", "cancel", "resume", "ls",
                                             "show", "export", "plot",  "probe",  "help"};
 
 void print_usage(std::ostream& os) {
@@ -29,6 +29,8 @@ void print_usage(std::ostream& os) {
         "  submit <kind>  queue a job on the mdemd daemon (same flags as run; --watch follows it)\n"
         "  watch ID       follow a daemon's job, storing its results in the local database\n"
         "  cancel ID      cancel a daemon's job (what it produced is kept)\n"
+        "  resume ID      queue a daemon's job that hit its --time-limit (TIMEOUT) again, from\n"
+        "                 its checkpoint\n"
         "  ls             list the jobs in the local results database (--server: on the daemon)\n"
         "  show ID        show one job: state, spec, summary, frame and snapshot counts\n"
         "                 (--server: the daemon's view)\n"
@@ -72,6 +74,7 @@ int dispatch(const std::vector<std::string>& argv_tail, std::ostream& out, std::
   if (cmd == "submit") return submit(rest, out, err);
   if (cmd == "watch") return watch(rest, out, err);
   if (cmd == "cancel") return cancel(rest, out, err);
+  if (cmd == "resume") return resume_remote(rest, out, err);
   if (cmd == "ls") return ls(rest, out, err);
   if (cmd == "show") return show(rest, out, err);
   if (cmd == "export") return export_job(rest, out, err);
@@ -92,6 +95,7 @@ int dispatch(const std::vector<std::string>& argv_tail, std::ostream& out, std::
     if (rest.front() == "submit") return submit({"--help"}, out, err);
     if (rest.front() == "watch") return watch({"--help"}, out, err);
     if (rest.front() == "cancel") return cancel({"--help"}, out, err);
+    if (rest.front() == "resume") return resume_remote({"--help"}, out, err);
     if (rest.front() == "ls") return ls({"--help"}, out, err);
     if (rest.front() == "show") return show({"--help"}, out, err);
     if (rest.front() == "export") return export_job({"--help"}, out, err);

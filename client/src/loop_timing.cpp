@@ -6,6 +6,8 @@
 #include <utility>
 #include <vector>
 
+#include "mdem/process_memory.h"
+
 namespace mdem::cli {
 
 void LoopTiming::begin() {
@@ -67,7 +69,9 @@ void print_loop_timing(std::ostream& os, const LoopTiming& t, const LoopFigures&
   const double ns_per_day = wall > 0 ? f.simulated_ps * 1e-3 / (wall / 86400.0) : 0;
   os << "Performance: " << fmt("%.4g", ns_per_day) << " ns/day, "
      << fmt("%.4g", ns_per_day > 0 ? 24.0 / ns_per_day : 0) << " hours/ns, "
-     << fmt("%.4g", f.element_steps_per_s) << " element-steps/s\n\n";
+     << fmt("%.4g", f.element_steps_per_s) << " element-steps/s\n";
+  // As sacct's MaxRSS: the whole process (getrusage), the results database and terminal included.
+  os << "Memory: process peak RSS " << fmt("%.1f", process_rss_peak_bytes() / 1e6) << " MB\n\n";
 
   std::vector<std::pair<std::string, double>> rows;
   const double steps = t.seconds(LoopTiming::kSteps);

@@ -460,3 +460,13 @@ v1::JobInfo JobClient::cancel(const std::string& job_id) {
 }
 
 }  // namespace mdem::cli
+v1::JobInfo JobClient::resume(const std::string& job_id, double time_limit_s) {
+  v1::ResumeJobRequest request;
+  request.set_job_id(job_id);
+  request.set_time_limit_s(time_limit_s);
+  v1::JobInfo info;
+  const auto ctx = call_context();
+  if (const grpc::Status s = stub_->ResumeJob(ctx.get(), request, &info); !s.ok()) fail(s);
+  return info;
+}
+

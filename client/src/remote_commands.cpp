@@ -20,6 +20,7 @@
 #include "mdem/snapshot_proto.h"
 #include "mdem/spec.h"
 #include "mdem/spec_job.h"
+#include "mdem/time_text.h"
 #include "remote.h"
 #include "results_store.h"
 #include "spec_flags.h"
@@ -45,6 +46,14 @@ constexpr const char* kRemoteExitHelp =
     "config file or token file, or a spec the daemon refused: INVALID_ARGUMENT); 3 the daemon\n"
     "could not be reached or did not answer (UNAVAILABLE, a deadline), or the connection was\n"
     "lost for good while watching.\n";
+
+constexpr const char* kTimeLimitHelp =
+    "  --time-limit T       wall-time limit on the job's running time (queue time not counted;\n"
+    "                       resumes add up), as Slurm's --time: 90s, 15m, 2h, 1.5d, MM, MM:SS,\n"
+    "                       HH:MM:SS, D-HH, D-HH:MM, D-HH:MM:SS; above 0, at most 30 days and the\n"
+    "                       daemon's max_time_limit (default: the daemon's default_time_limit).\n"
+    "                       Reaching it ends the job in TIMEOUT with its checkpoint kept;\n"
+    "                       `mdem resume ID --time-limit T` continues it.\n";
 
 // The help of `mdem submit`: with a job kind first in `args`, that kind's flags.
 void print_submit_help(const std::vector<std::string>& args, std::ostream& os) {
@@ -72,7 +81,8 @@ void print_submit_help(const std::vector<std::string>& args, std::ostream& os) {
         "  --request-id ID      1..128 characters of [A-Za-z0-9._:-] (default: a random one,\n"
         "                       printed so a retry can reuse it)\n"
         "  --watch              follow the job until it ends (see `mdem watch --help`)\n"
-        "  --reconnect-timeout S  with --watch: give up reconnecting after S seconds (default "
+     << kTimeLimitHelp
+     << "  --reconnect-timeout S  with --watch: give up reconnecting after S seconds (default "
         "60)\n"
         "  --json               print one JSON object: job_id, request_id, created, state, server\n"
         "                       (with --watch: the final report, as `mdem watch --json`)\n"
@@ -126,6 +136,26 @@ void print_cancel_help(std::ostream& os) {
      << kRemoteExitHelp;
 }
 
+void print_resume_help(std::ostream& os) {
+  os << "Usage: mdem resume ID [--time-limit T] [--watch] [--json] [--db PATH] [connection flags]\n"
+        "\n"
+        "Queues a daemon's job that ended in TIMEOUT (its wall-time limit reached) again: it\n"
+        "continues from the checkpoint it wrote when it stopped, to the same result as a run\n"
+        "that was never stopped, with T more running time (its limit becomes its running time\n"
+        "so far plus T). ID may be a prefix of a job in the local database, as for watch.\n"
+        "\n"
+        "Flags:\n"
+     << kTimeLimitHelp
+     << "  --watch              then follow the job until it ends (see `mdem watch --help`)\n"
+        "  --reconnect-timeout S  with --watch: give up reconnecting after S seconds (default "
+        "60)\n"
+        "  --json               print one JSON object: job_id, state, reason, time_limit_s\n"
+        "                       (with --watch: the final report, as `mdem watch --json`)\n"
+     << kDbHelp << "  -h, --help           show this help\n"
+     << kConnectionHelp << "\n"
+     << kRemoteExitHelp;
+}
+
 // Prints the command's help when asked for, else runs its body, turning what it throws into a
 // message prefixed with the command and an exit code.
 template <class Help, class Body>
@@ -163,6 +193,17 @@ std::string db_path(const std::map<std::string, std::string>& given) {
   return it != given.end() ? it->second : ResultsStore::default_path();
 }
 
+// --time-limit as Slurm's --time takes it, in seconds; 0 when not given (the daemon's default).
+double time_limit_flag(const std::map<std::string, std::string>& given) {
+  const auto it = given.find("--time-limit");
+  if (it == given.end()) return 0;
+  try {
+    return parse_time_limit(it->second, "--time-limit");
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+}
+
 double reconnect_timeout(const std::map<std::string, std::string>& given) {
   const auto it = given.find("--reconnect-timeout");
   if (it == given.end()) return kDefaultReconnectTimeoutS;
@@ -178,7 +219,7 @@ JobRecord record_of(const v1::JobInfo& info, const ConnectionSettings& settings,
   r.kind = info.kind().empty() ? std::string(job_kind_name(info.spec())) : info.kind();
   r.spec_json = info.has_spec() ? spec::to_json(info.spec(), false) : "{}";
   r.state = state;
-  r.created_at = info.created_at();
+  r.created_at = shown_time(info.created_at());
   r.server = settings.server;
   r.token_file = settings.token_file;  // watch and cancel use it again; the token is not stored
   return r;
@@ -192,9 +233,13 @@ json info_json(const v1::JobInfo& info) {
       {"name", info.name()},
       {"state", job_state_name(info.state())},
       {"reason", info.reason()},
-      {"created_at", info.created_at()},
-      {"started_at", info.started_at()},
-      {"finished_at", info.finished_at()},
+      {"created_at", shown_time(info.created_at())},
+      {"started_at", shown_time(info.started_at())},
+      {"finished_at", shown_time(info.finished_at())},
+      {"elapsed_s", info.elapsed_s()},
+      {"time_limit_s", info.time_limit_s()},
+      {"job_data_peak_bytes", info.job_data_peak_bytes()},
+      {"daemon_rss_peak_bytes", info.daemon_rss_peak_bytes()},
       {"elements", info.elements()},
       {"step", info.step()},
       {"total_steps", info.total_steps()},
@@ -375,7 +420,7 @@ class Watcher {
         if (!is_final(rec->state)) {
           u.state = state;
           u.reason = info.reason();
-          u.finished_at = info.finished_at();
+          u.finished_at = shown_time(info.finished_at());
         }
         if (rec->summary_json.empty() && !info.report_json().empty())
           u.report_json = info.report_json();
@@ -405,7 +450,7 @@ class Watcher {
         const std::string state = job_state_name(ev.state().state());
         batch_.state = state;
         batch_.reason = ev.state().reason();
-        if (is_final(state)) batch_.finished_at = ev.time();
+        if (is_final(state)) batch_.finished_at = shown_time(ev.time());
         if (!json_)
           progress_.note(id_ + ": " + state +
                          (ev.state().reason().empty() ? "" : " (" + ev.state().reason() + ")"));
@@ -447,7 +492,7 @@ class Watcher {
           batch_.reason = doc.contains("reason") && doc["reason"].is_string()
                               ? doc["reason"].get<std::string>()
                               : "";
-          if (batch_.finished_at.empty()) batch_.finished_at = ev.time();
+          if (batch_.finished_at.empty()) batch_.finished_at = shown_time(ev.time());
         }
         mark(seq, true);
         break;
@@ -605,7 +650,8 @@ int run_submit(const std::vector<std::string>& args, std::ostream& out, std::ost
     throw UsageError("unknown job kind '" + args.front() + "' (allowed: " + spec_kind_names() +
                      ")");
   FlagSpec fs = spec_flag_spec(*kind);
-  fs.with_value.insert(fs.with_value.end(), {"--request-id", "--db", "--reconnect-timeout"});
+  fs.with_value.insert(fs.with_value.end(),
+                       {"--request-id", "--db", "--reconnect-timeout", "--time-limit"});
   fs.switches.insert(fs.switches.end(), {"--watch", "--json"});
   add_connection_flags(fs);
   const auto given = parse_flags({args.begin() + 1, args.end()}, fs);
@@ -621,6 +667,7 @@ int run_submit(const std::vector<std::string>& args, std::ostream& out, std::ost
   const double timeout = reconnect_timeout(given);
   ConnectionSettings settings = resolve_connection(given, process_env());
   ResultsStore store(db_path(given));  // before submitting: a job is never left unrecorded
+  const double time_limit_s = time_limit_flag(given);
 
   if (!as_json)
     err << "submitting a " << kind->name << " job to mdemd at " << settings.server
@@ -631,6 +678,7 @@ int run_submit(const std::vector<std::string>& args, std::ostream& out, std::ost
   *request.mutable_spec() = spec;
   v1::SubmitJobResponse response;
   try {
+  request.set_time_limit_s(time_limit_s);
     response = client.submit(request);
   } catch (const RemoteError& e) {
     if (e.exit_code != kConnection) throw;
@@ -667,6 +715,47 @@ int run_submit(const std::vector<std::string>& args, std::ostream& out, std::ost
 
 int run_watch(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   FlagSpec fs{{"--db", "--reconnect-timeout"}, {"--json"}};
+int run_resume_timeout(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  FlagSpec fs{{"--db", "--reconnect-timeout", "--time-limit"}, {"--json", "--watch"}};
+  add_connection_flags(fs);
+  auto [given_id, given] = parse_id_and_flags(args, fs);
+  const bool as_json = given.count("--json") > 0, follow = given.count("--watch") > 0;
+  const double grant_s = time_limit_flag(given);
+  const double timeout = reconnect_timeout(given);
+  ResultsStore store(db_path(given));
+  std::optional<JobRecord> rec;
+  try {
+    rec = store.find(given_id);
+  } catch (const StoreError& e) {  // an ambiguous prefix
+    throw UsageError(e.what());
+  }
+  if (rec && rec->server.empty())
+    throw UsageError("job '" + rec->id + "' in " + store.path() +
+                     " ran in a process of its own (`mdem run`), not on a daemon; only a "
+                     "daemon's job ends in TIMEOUT");
+  const ConnectionSettings settings =
+      resolve_connection(given, process_env(), rec ? rec->server : "", rec ? rec->token_file : "");
+  JobClient client(settings);
+  const v1::JobInfo info = client.resume(rec ? rec->id : given_id, grant_s);
+  if (rec)
+    store.set_state(info.job_id(), job_state_name(info.state()), info.reason());
+  else
+    store.upsert_remote_job(record_of(info, settings, job_state_name(info.state())));
+  if (as_json && !follow) {
+    write_json(out, json{{"job_id", info.job_id()},
+                         {"state", job_state_name(info.state())},
+                         {"reason", info.reason()},
+                         {"time_limit_s", info.time_limit_s()}});
+    out << "\n";
+    return kOk;
+  }
+  if (!as_json)
+    err << "queued " << info.job_id() << " again: " << info.reason()
+        << (follow ? "" : "; follow it with `mdem watch " + info.job_id() + "`") << "\n";
+  if (!follow) return kOk;
+  return Watcher(client, store, info.job_id(), as_json, timeout, out, err).run();
+}
+
   add_connection_flags(fs);
   auto [given_id, given] = parse_id_and_flags(args, fs);
   const bool as_json = given.count("--json") > 0;
@@ -740,53 +829,41 @@ int run_cancel(const std::vector<std::string>& args, std::ostream& out, std::ost
   return kOk;
 }
 
-// Seconds since the epoch of an ISO 8601 UTC time ("2026-01-02T03:04:05Z", with or without
-// ".123"); nullopt for anything else.
-std::optional<double> epoch_seconds(const std::string& iso) {
-  std::tm tm{};
-  double frac = 0;
-  int consumed = 0;
-  if (std::sscanf(iso.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d%n", &tm.tm_year, &tm.tm_mon, &tm.tm_mday,
-                  &tm.tm_hour, &tm.tm_min, &tm.tm_sec, &consumed) != 6)
-    return std::nullopt;
-  if (iso[consumed] == '.') frac = std::atof(("0" + iso.substr(consumed)).c_str());
-  tm.tm_year -= 1900;
-  tm.tm_mon -= 1;
-  return static_cast<double>(timegm(&tm)) + frac;
-}
-
-// The time as the local database shows it: ISO 8601 UTC to the second (the daemon's
-// milliseconds dropped), so every table shows one style.
-std::string shown_time(const std::string& iso) {
-  const std::size_t dot = iso.find('.');
-  if (dot == std::string::npos || iso.empty() || iso.back() != 'Z') return iso;
-  return iso.substr(0, dot) + "Z";
-}
-
-// Elapsed wall time of a job as Slurm prints it ([D-]HH:MM:SS): from its start to its end, or to
-// now while it runs; "-" before it started.
+// Running time of a job as Slurm's sacct prints Elapsed ([D-]HH:MM:SS): queue time not
+// counted, every run and resume added up; "-" before it first ran.
 std::string elapsed_text(const v1::JobInfo& info) {
-  const auto start = epoch_seconds(info.started_at());
-  if (!start) return "-";
-  const auto end =
-      info.finished_at().empty()
-          ? std::optional<double>(
-                std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
-                    .count())
-          : epoch_seconds(info.finished_at());
-  if (!end) return "-";
-  const long s = std::max(0L, static_cast<long>(*end - *start));
+  return info.started_at().empty() ? "-" : duration_text(info.elapsed_s());
+}
+
+// Its wall-time limit ([D-]HH:MM:SS), "none" without one.
+std::string time_limit_text(const v1::JobInfo& info) {
+  return info.time_limit_s() > 0 ? duration_text(info.time_limit_s()) : "none";
+}
+
+// Bytes in kB, MB or GB (powers of 1000); "-" for 0 (not measured).
+std::string bytes_text(long bytes) {
+  if (bytes <= 0) return "-";
   char buf[32];
-  if (s >= 86400)
-    std::snprintf(buf, sizeof buf, "%ld-%02ld:%02ld:%02ld", s / 86400, s % 86400 / 3600,
-                  s % 3600 / 60, s % 60);
+  const double b = static_cast<double>(bytes);
+  if (b < 1e6)
+    std::snprintf(buf, sizeof buf, "%.1f kB", b / 1e3);
+  else if (b < 1e9)
+    std::snprintf(buf, sizeof buf, "%.1f MB", b / 1e6);
   else
-    std::snprintf(buf, sizeof buf, "%02ld:%02ld:%02ld", s / 3600, s % 3600 / 60, s % 60);
+    std::snprintf(buf, sizeof buf, "%.2f GB", b / 1e9);
   return buf;
 }
 
 std::string progress_text(const v1::JobInfo& info) {
   if (info.total_steps() <= 0) return "-";
+// Memory as sacct's MaxRSS would mean it for a job of its own, named for what it is: the peak of
+// the job's simulation data, and the daemon's (all jobs') peak resident set for context.
+std::string memory_text(const v1::JobInfo& info) {
+  if (info.job_data_peak_bytes() <= 0 && info.daemon_rss_peak_bytes() <= 0) return "-";
+  return "job data peak " + bytes_text(info.job_data_peak_bytes()) + "; daemon RSS peak " +
+         bytes_text(info.daemon_rss_peak_bytes());
+}
+
   return std::to_string(info.step() * 100 / info.total_steps()) + "%";
 }
 
@@ -848,14 +925,16 @@ int remote_ls(const std::map<std::string, std::string>& given, std::ostream& out
   std::vector<std::vector<std::string>> rows;
   rows.push_back({"ID"});
   if (all) rows.back().push_back("USER");
-  rows.back().insert(rows.back().end(),
-                     {"KIND", "STATE", "CREATED", "ELAPSED", "DONE", "NAME / REASON"});
+  rows.back().insert(rows.back().end(), {"KIND", "STATE", "CREATED", "ELAPSED", "LIMIT", "MEM",
+                                         "DONE", "NAME / REASON"});
   for (const v1::JobInfo& info : response.jobs()) {
     rows.push_back({info.job_id()});
     if (all) rows.back().push_back(info.user());
-    rows.back().insert(rows.back().end(),
-                       {info.kind(), job_state_name(info.state()), shown_time(info.created_at()),
-                        elapsed_text(info), progress_text(info), note_text(info)});
+    rows.back().insert(
+        rows.back().end(),
+        {info.kind(), job_state_name(info.state()), shown_time(info.created_at()),
+         elapsed_text(info), time_limit_text(info), bytes_text(info.job_data_peak_bytes()),
+         progress_text(info), note_text(info)});
   }
   print_table(out, rows);
   return kOk;
@@ -898,7 +977,9 @@ int remote_show(const std::string& id, const std::map<std::string, std::string>&
   rows.push_back({"created:", shown_time(info.created_at())});
   rows.push_back({"started:", info.started_at().empty() ? "-" : shown_time(info.started_at())});
   rows.push_back({"finished:", info.finished_at().empty() ? "-" : shown_time(info.finished_at())});
-  rows.push_back({"elapsed:", elapsed_text(info)});
+  rows.push_back({"elapsed:", elapsed_text(info) + " (running time)"});
+  rows.push_back({"time limit:", time_limit_text(info)});
+  rows.push_back({"memory:", memory_text(info)});
   rows.push_back({"progress:", std::to_string(info.step()) + " / " +
                                    std::to_string(info.total_steps()) + " steps"});
   rows.push_back({"elements:", std::to_string(info.elements())});
@@ -933,6 +1014,11 @@ int watch(const std::vector<std::string>& args, std::ostream& out, std::ostream&
 
 int cancel(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   if (names_study(args) && !wants_help(args)) return cancel_study(args, out, err);
+int resume_remote(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  return guarded("resume", args, out, err, print_resume_help,
+                 [&] { return run_resume_timeout(args, out, err); });
+}
+
   return guarded("cancel", args, out, err, print_cancel_help,
                  [&] { return run_cancel(args, out, err); });
 }

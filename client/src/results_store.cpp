@@ -26,6 +26,7 @@
 #include "mdem/job_id.h"
 #include "mdem/job_state.h"
 #include "mdem/sqlite_db.h"
+#include "mdem/time_text.h"
 
 namespace mdem::cli {
 namespace {
@@ -43,7 +44,7 @@ CREATE TABLE jobs (
   id TEXT PRIMARY KEY NOT NULL,
   kind TEXT NOT NULL,
   spec_json TEXT NOT NULL,
-  state TEXT NOT NULL CHECK (state IN ('QUEUED', 'RUNNING', 'SUCCEEDED', 'FAILED', 'CANCELLED')),
+  state TEXT NOT NULL CHECK (state IN ('QUEUED', 'RUNNING', 'SUCCEEDED', 'FAILED', 'CANCELLED', 'TIMEOUT')),
   reason TEXT NOT NULL DEFAULT '',
   summary_json TEXT NOT NULL DEFAULT '',
   created_at TEXT NOT NULL,
@@ -339,7 +340,48 @@ void check_schema_version(Impl& db) {
                      (v > kSchemaVersion ? " (written by a newer mdem)" : ""));
 }
 
+// TIMEOUT (a daemon's job that reached its wall-time limit) joined the states the jobs table's
+// CHECK allows after version 1. An older file's CHECK is widened in place: SQLite documents
+// editing the stored schema text (writable_schema, then a new schema_version) for changes that
+// leave the stored records as they are, which widening a CHECK does
+// (https://www.sqlite.org/lang_altertable.html#otheralter).
+constexpr const char* kStatesBefore = "'FAILED', 'CANCELLED'))";
+constexpr const char* kStatesNow = "'FAILED', 'CANCELLED', 'TIMEOUT'))";
+
+std::string jobs_table_sql(Impl& db) {
+  Query q(db, "SELECT sql FROM sqlite_master WHERE type = 'table' AND name = 'jobs'",
+          "cannot read the schema");
+  return q.step() ? q.text(0) : std::string();
+}
+
+bool lacks_timeout_state(Impl& db) {
+  const std::string sql = jobs_table_sql(db);
+  return sql.find(kStatesBefore) != std::string::npos;
+}
+
+// Inside the migration's transaction.
+void widen_state_check(Impl& db) {
+  std::string sql = jobs_table_sql(db);
+  const std::size_t at = sql.find(kStatesBefore);
+  if (at == std::string::npos) return;  // widened meanwhile
+  sql.replace(at, std::string(kStatesBefore).size(), kStatesNow);
+  long version = 0;
+  {
+    Query q(db, "PRAGMA schema_version", "cannot read the schema version");
+    if (q.step()) version = q.integer(0);
+  }
+  db.exec("PRAGMA writable_schema = ON", "cannot allow the TIMEOUT state");
+  Query(db, "UPDATE sqlite_master SET sql = ? WHERE type = 'table' AND name = 'jobs'",
+        "cannot allow the TIMEOUT state")
+      .bind(1, sql)
+      .run();
+  db.exec(("PRAGMA schema_version = " + std::to_string(version + 1)).c_str(),
+          "cannot allow the TIMEOUT state");
+  db.exec("PRAGMA writable_schema = OFF", "cannot allow the TIMEOUT state");
+}
+
 bool needs_migration(Impl& db) {
+  if (lacks_timeout_state(db)) return true;
   for (const Migration& m : kMigrations)
     if (!db.has_column("jobs", m.column)) return true;
   for (const Migration& m : kSnapshotMigrations)
@@ -399,6 +441,7 @@ void migrate(Impl& db) {
     return;
   }
   Transaction t(db);
+  widen_state_check(db);
   for (const Migration& m : kMigrations)
     if (!db.has_column("jobs", m.column))  // another process may have added it meanwhile
       db.exec((std::string("ALTER TABLE jobs ADD COLUMN ") + m.definition).c_str(),
@@ -498,9 +541,21 @@ void check_snapshot_values(const Impl& db, const Snapshot& s) {
 
 // ---- rows <-> records -------------------------------------------------------------------------
 
+// Times as every table shows them, to the second (a daemon's job recorded by an older mdem kept
+// the daemon's milliseconds).
 JobRecord read_job(const Query& q) {
-  return JobRecord{q.text(0), q.text(1), q.text(2), q.text(3),    q.text(4),  q.text(5),
-                   q.text(6), q.text(7), q.text(8), q.integer(9), q.text(10), q.text(11)};
+  return JobRecord{q.text(0),
+                   q.text(1),
+                   q.text(2),
+                   q.text(3),
+                   q.text(4),
+                   q.text(5),
+                   shown_time(q.text(6)),
+                   shown_time(q.text(7)),
+                   q.text(8),
+                   q.integer(9),
+                   q.text(10),
+                   q.text(11)};
 }
 
 // A job run in-process whose process is gone without finishing it (killed outright, or its
@@ -704,9 +759,12 @@ void write_snapshot(Impl& db, const std::string& id, const Snapshot& snap) {
 
 void write_state(Impl& db, const std::string& id, const std::string& state,
                  const std::string& reason) {
-  Query q(db, "UPDATE jobs SET state = ?, reason = ? WHERE id = ?",
+  // A job that has not ended (again: a TIMEOUT job resumed) has no end time.
+  Query q(db,
+          "UPDATE jobs SET state = ?1, reason = ?2, finished_at = CASE WHEN ?4 THEN finished_at "
+          "ELSE '' END WHERE id = ?3",
           "cannot set the state of job '" + id + "'");
-  q.bind(1, state).bind(2, reason).bind(3, id);
+  q.bind(1, state).bind(2, reason).bind(3, id).bind(4, static_cast<long>(is_final(state)));
   q.run();
 }
 

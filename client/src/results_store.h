@@ -72,7 +72,8 @@ class ResultsStore {
   void create_job(const JobRecord& job);
   void finish_job(const std::string& id, const std::string& state, const std::string& reason,
                   const std::string& summary_json);
-  // Sets the state and reason only (not finished_at nor the summary).
+  // Sets the state and reason only (not the summary; finished_at only cleared, for a state
+  // that has not ended: a daemon's TIMEOUT job queued again by `mdem resume`).
   void set_state(const std::string& id, const std::string& state, const std::string& reason);
 
   // A daemon's job (job.server set): inserted when new; when the id exists, its kind, spec,

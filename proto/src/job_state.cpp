@@ -3,8 +3,8 @@
 namespace mdem {
 
 namespace {
-constexpr JobState kStates[] = {v1::QUEUED, v1::RUNNING,   v1::SUCCEEDED,
-                                v1::FAILED, v1::CANCELLED, v1::INTERRUPTED};
+constexpr JobState kStates[] = {v1::QUEUED,    v1::RUNNING,     v1::SUCCEEDED, v1::FAILED,
+                                v1::CANCELLED, v1::INTERRUPTED, v1::TIMEOUT};
 }  // namespace
 
 std::string job_state_name(JobState s) {
@@ -19,7 +19,9 @@ std::optional<JobState> parse_job_state(std::string_view name) {
 
 bool is_stored(JobState s) { return s != v1::JOB_STATE_UNSPECIFIED && s != v1::INTERRUPTED; }
 
-bool is_final(JobState s) { return s == v1::SUCCEEDED || s == v1::FAILED || s == v1::CANCELLED; }
+bool is_final(JobState s) {
+  return s == v1::SUCCEEDED || s == v1::FAILED || s == v1::CANCELLED || s == v1::TIMEOUT;
+}
 
 bool is_final(std::string_view name) {
   const std::optional<JobState> s = parse_job_state(name);

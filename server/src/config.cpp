@@ -8,6 +8,8 @@
 #include <map>
 #include <set>
 
+#include "mdem/time_text.h"
+
 namespace mdem::server {
 namespace {
 
@@ -29,6 +31,16 @@ long integer(const std::string& v, const std::string& who, long lo, long hi) {
     throw ConfigError(who + ": '" + v + "' is not a whole number in [" + std::to_string(lo) + ", " +
                       std::to_string(hi) + "]");
   return n;
+}
+
+// A wall-time limit as Slurm's --time takes it ("2h", "1-00:00:00"), or "none" (0).
+double time_limit(const std::string& v, const std::string& who) {
+  if (v == "none") return 0;
+  try {
+    return parse_time_limit(v, who);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(std::string(e.what()) + ", or none");
+  }
 }
 
 std::string text(const std::string& v, const std::string& who) {
@@ -60,6 +72,9 @@ const std::map<std::string, Setter>& setters() {
        [](auto& c, auto& v, auto& w) { c.event_buffer_mb = number(v, w, 1, 65536); }},
       {"drain_timeout_s",
        [](auto& c, auto& v, auto& w) { c.drain_timeout_s = number(v, w, 0, 3600); }},
+      {"default_time_limit",
+       [](auto& c, auto& v, auto& w) { c.default_time_limit_s = time_limit(v, w); }},
+      {"max_time_limit", [](auto& c, auto& v, auto& w) { c.max_time_limit_s = time_limit(v, w); }},
       {"keepalive_time_s",
        [](auto& c, auto& v, auto& w) { c.keepalive_time_s = integer(v, w, 1, 86400); }},
       {"log_level",
@@ -152,6 +167,10 @@ DaemonConfig parse_daemon_config(const std::vector<std::string>& args) {
   if (c.token_file.empty()) throw ConfigError("--token-file (token_file) is required");
   if (c.tls_cert.empty() != c.tls_key.empty())
     throw ConfigError("--tls-cert and --tls-key go together (both for TLS, neither without)");
+  if (c.max_time_limit_s > 0 && c.default_time_limit_s > c.max_time_limit_s)
+    throw ConfigError("--default-time-limit (" + duration_text(c.default_time_limit_s) +
+                      ") is above --max-time-limit (" + duration_text(c.max_time_limit_s) +
+                      "); a job without a limit of its own would be refused");
   if (c.listen.find(':') == std::string::npos)
     throw ConfigError("--listen: '" + c.listen + "' is not HOST:PORT");
   return c;
@@ -181,6 +200,13 @@ const char* daemon_usage() {
          "  --event-buffer-mb X      per-job buffer of frames/snapshots not yet on disk; beyond\n"
          "                           it they are coalesced and watchers are told (default 64)\n"
          "  --drain-timeout S        on SIGTERM, time for running jobs to checkpoint (default 30)\n"
+         "  --default-time-limit T   wall-time limit of a job submitted without one, as Slurm's\n"
+         "                           --time: 90s, 15m, 2h, 1.5d, MM, MM:SS, HH:MM:SS, "
+         "D-HH[:MM[:SS]]\n"
+         "                           (default none: --max-time-limit, or no limit)\n"
+         "  --max-time-limit T       the longest limit a job may ask for, same forms (default\n"
+         "                           none: 30 days); a job reaching its limit ends in TIMEOUT\n"
+         "                           with its checkpoint kept (`mdem resume` continues it)\n"
          "  --keepalive-time S       HTTP/2 keepalive ping interval (default 30)\n"
          "  --log-level L            trace, debug, info, warn, error (default info)\n"
          "  --log-json true|false    one JSON object per log line (default false)\n"

@@ -25,8 +25,13 @@ struct DaemonConfig {
   long max_steps = 100'000'000;            // per job
   double event_buffer_mb = 64;             // per job, frames/snapshots waiting for the disk
   double drain_timeout_s = 30;             // SIGTERM: wait this long for jobs to checkpoint
-  int keepalive_time_s = 30;               // server-side HTTP/2 keepalive pings
-  std::string log_level = "info";          // trace, debug, info, warn, error
+  // Wall-time limits of jobs' running time, as Slurm's partition DefaultTime and MaxTime: the
+  // limit of a job submitted without one (0 = max_time_limit_s, or none when that is 0 too), and
+  // the largest a job may ask for (0 = up to mdem's own 30 days).
+  double default_time_limit_s = 0;
+  double max_time_limit_s = 0;
+  int keepalive_time_s = 30;       // server-side HTTP/2 keepalive pings
+  std::string log_level = "info";  // trace, debug, info, warn, error
 };
 
 // Parses argv (without the program name). Throws ConfigError; `--help` is handled by the caller.

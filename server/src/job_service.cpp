@@ -8,6 +8,7 @@
 #include "mdem/job_runner.h"
 #include "mdem/spec.h"
 #include "mdem/spec_job.h"
+#include "mdem/time_text.h"
 #include "queue_place.h"
 #include "request_check.h"
 
@@ -78,6 +79,36 @@ Status JobServiceImpl::visible_job(const Identity& who, const std::string& id, J
   return Status::OK;
 }
 
+Status JobServiceImpl::time_limit(double asked, const char* field, double& limit) const {
+  if (!std::isfinite(asked) || asked < 0 || asked > kMaxTimeLimitS)
+    return Status(StatusCode::INVALID_ARGUMENT,
+                  std::string(field) + ": " + std::to_string(asked) + " s is not in (0, " +
+                      std::to_string(static_cast<long>(kMaxTimeLimitS)) +
+                      "] s (30 days), or 0 for the daemon's default");
+  limit = asked > 0 ? asked
+                    : (config_.default_time_limit_s > 0 ? config_.default_time_limit_s
+                                                        : config_.max_time_limit_s);
+  if (config_.max_time_limit_s > 0 && limit > config_.max_time_limit_s)
+    return Status(StatusCode::INVALID_ARGUMENT,
+                  std::string(field) + ": " + duration_text(limit) +
+                      " is above this daemon's limit max_time_limit = " +
+                      duration_text(config_.max_time_limit_s) + "; ask for at most that");
+  return Status::OK;
+}
+
+v1::JobInfo JobServiceImpl::job_info(const JobRow& row, const std::vector<JobOwner>& queue,
+                                     const std::vector<JobOwner>& running, const Identity& who) {
+  v1::JobInfo info = row.info();
+  if (row.state == v1::RUNNING)
+    if (const auto u = scheduler_.usage(row.id)) {
+      info.set_elapsed_s(u->elapsed_s);
+      info.set_job_data_peak_bytes(u->peak_bytes);
+      info.set_daemon_rss_peak_bytes(u->daemon_rss_peak_bytes);
+    }
+  describe_wait(info, queue, running, config_.workers, who);
+  return info;
+}
+
 Status JobServiceImpl::SubmitJob(grpc::ServerContext* ctx, const v1::SubmitJobRequest* req,
                                  v1::SubmitJobResponse* resp) {
   return as_user(ctx, [&](const Identity& who) -> Status {
@@ -91,6 +122,8 @@ Status JobServiceImpl::SubmitJob(grpc::ServerContext* ctx, const v1::SubmitJobRe
                     "the request has fields mdemd cannot read (unknown, or sent with another "
                     "wire type than declared); nothing was queued:\n" +
                         bad);
+    double limit = 0;
+    if (Status s = time_limit(req->time_limit_s(), "time_limit_s", limit); !s.ok()) return s;
     v1::JobSpec spec;
     try {
       spec = spec::finalize(req->spec());
@@ -130,7 +163,7 @@ Status JobServiceImpl::SubmitJob(grpc::ServerContext* ctx, const v1::SubmitJobRe
     SubmitResult r;
     try {
       r = store_.submit(who.user, req->request_id(), spec, std::string(job_kind_name(spec)),
-                        elements, total_steps, threads, config_.max_queued_per_user);
+                        elements, total_steps, threads, config_.max_queued_per_user, limit);
     } catch (const LimitError& e) {
       return Status(StatusCode::RESOURCE_EXHAUSTED, e.what());
     } catch (const SqliteError& e) {  // e.g. the disk is full
@@ -159,9 +192,8 @@ Status JobServiceImpl::GetJob(grpc::ServerContext* ctx, const v1::GetJobRequest*
   return as_user(ctx, [&](const Identity& who) -> Status {
     JobRow row;
     if (Status s = visible_job(who, req->job_id(), row); !s.ok()) return s;
-    *resp = row.info();
-    if (row.state == v1::QUEUED)
-      describe_wait(*resp, store_.queue(), store_.running(), config_.workers, who);
+    *resp = row.state == v1::QUEUED ? job_info(row, store_.queue(), store_.running(), who)
+                                    : job_info(row, {}, {}, who);
     return Status::OK;
   });
 }
@@ -177,9 +209,7 @@ Status JobServiceImpl::ListJobs(grpc::ServerContext* ctx, const v1::ListJobsRequ
     const int limit = req->limit() == 0 ? 100 : req->limit();
     const std::vector<JobOwner> queue = store_.queue(), running = store_.running();
     for (const JobRow& r : store_.list(req->all_users() ? "" : who.user, limit)) {
-      *resp->add_jobs() = r.info();
-      describe_wait(*resp->mutable_jobs(resp->jobs_size() - 1), queue, running, config_.workers,
-                    who);
+      *resp->add_jobs() = job_info(r, queue, running, who);
     }
     return Status::OK;
   });
@@ -203,6 +233,35 @@ Status JobServiceImpl::CancelJob(grpc::ServerContext* ctx, const v1::CancelJobRe
       }
     }
     *resp = row.info();
+    return Status::OK;
+  });
+}
+
+Status JobServiceImpl::ResumeJob(grpc::ServerContext* ctx, const v1::ResumeJobRequest* req,
+                                 v1::JobInfo* resp) {
+  return as_user(ctx, [&](const Identity& who) -> Status {
+    JobRow row;
+    if (Status s = visible_job(who, req->job_id(), row); !s.ok()) return s;
+    double grant = 0;
+    if (Status s = time_limit(req->time_limit_s(), "time_limit_s", grant); !s.ok()) return s;
+    if (row.state != v1::TIMEOUT)
+      return Status(StatusCode::FAILED_PRECONDITION,
+                    "job '" + row.id + "' is " + job_state_name(row.state) +
+                        "; only a job that ended in TIMEOUT can be resumed");
+    if (const std::string why = storage_.check(); !why.empty())
+      return unavailable(why, "the job stays in TIMEOUT");
+    const std::string reason = "resumed by " + who.user + " from the checkpoint at step " +
+                               std::to_string(row.checkpoint_step) + " after " +
+                               duration_text(row.wall_s) + " of running time; " +
+                               (grant > 0 ? "limit now " + duration_text(row.wall_s + grant) +
+                                                " (" + duration_text(grant) + " more)"
+                                          : std::string("no time limit"));
+    if (!store_.requeue_timeout(row.id, grant, reason))  // it changed meanwhile
+      return Status(StatusCode::FAILED_PRECONDITION,
+                    "job '" + row.id + "' is no longer in TIMEOUT; only such a job can be resumed");
+    spdlog::info("event=job_resume job={} by={} grant_s={:.1f}", row.id, who.user, grant);
+    scheduler_.wake();
+    *resp = job_info(*store_.get(row.id), store_.queue(), store_.running(), who);
     return Status::OK;
   });
 }

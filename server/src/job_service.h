@@ -33,6 +33,8 @@ class JobServiceImpl final : public v1::JobService::Service {
                          v1::JobInfo* resp) override;
   grpc::Status WatchJob(grpc::ServerContext* ctx, const v1::WatchJobRequest* req,
                         grpc::ServerWriter<v1::JobEvent>* writer) override;
+  grpc::Status ResumeJob(grpc::ServerContext* ctx, const v1::ResumeJobRequest* req,
+                         v1::JobInfo* resp) override;
 
  private:
   // The caller, or UNAUTHENTICATED.
@@ -43,6 +45,13 @@ class JobServiceImpl final : public v1::JobService::Service {
   grpc::Status as_user(const grpc::ServerContext* ctx, Body&& body) const;
   // The job if it exists and the caller may see it; NOT_FOUND / PERMISSION_DENIED otherwise.
   grpc::Status visible_job(const Identity& who, const std::string& id, JobRow& row);
+  // The wall-time limit a request's time_limit_s (`field`) gives: its own, else the daemon's
+  // default or maximum (0 = none); INVALID_ARGUMENT for a value out of range or above the maximum.
+  grpc::Status time_limit(double asked, const char* field, double& limit) const;
+  // What GetJob and ListJobs say of a job: its row, with a running job's usage as of its last
+  // poll and a queued job's place in the queue.
+  v1::JobInfo job_info(const JobRow& row, const std::vector<JobOwner>& queue,
+                       const std::vector<JobOwner>& running, const Identity& who);
 
   DaemonConfig config_;
   const TokenTable& tokens_;

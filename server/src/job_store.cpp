@@ -6,6 +6,7 @@
 #include <random>
 
 #include "mdem/job_id.h"
+#include "mdem/time_text.h"
 
 namespace mdem::server {
 namespace {
@@ -40,6 +41,9 @@ CREATE TABLE jobs (
   last_progress_step INTEGER NOT NULL DEFAULT -1,
   columns_logged INTEGER NOT NULL DEFAULT 0,
   report_json TEXT NOT NULL DEFAULT '',
+  time_limit_s REAL NOT NULL DEFAULT 0,
+  peak_bytes INTEGER NOT NULL DEFAULT 0,
+  daemon_rss_peak_bytes INTEGER NOT NULL DEFAULT 0,
   UNIQUE (user, request_id)
 );
 CREATE INDEX jobs_state ON jobs (state, user);
@@ -54,7 +58,16 @@ CREATE TABLE events (
 constexpr const char* kJobColumns =
     "id, user, request_id, kind, name, spec, state, reason, created_at, started_at, finished_at, "
     "elements, total_steps, step, last_seq, threads, resumes, checkpoint_step, wall_s, "
-    "last_frame_step, last_snapshot_step, last_progress_step, columns_logged, report_json";
+    "last_frame_step, last_snapshot_step, last_progress_step, columns_logged, report_json, "
+    "time_limit_s, peak_bytes, daemon_rss_peak_bytes";
+
+// A job database of an mdemd before wall-time limits and memory peaks gains them: its jobs had
+// no limit, and their peaks were not measured (0, shown as unknown).
+constexpr const char* kUsageColumns = R"sql(
+ALTER TABLE jobs ADD COLUMN time_limit_s REAL NOT NULL DEFAULT 0;
+ALTER TABLE jobs ADD COLUMN peak_bytes INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE jobs ADD COLUMN daemon_rss_peak_bytes INTEGER NOT NULL DEFAULT 0;
+)sql";
 
 JobRow read_row(const Query& q) {
   JobRow r;
@@ -82,6 +95,9 @@ JobRow read_row(const Query& q) {
   r.last_progress_step = q.integer(21);
   r.columns_logged = q.integer(22) != 0;
   r.report_json = q.text(23);
+  r.time_limit_s = q.real(24);
+  r.peak_bytes = q.integer(25);
+  r.daemon_rss_peak_bytes = q.integer(26);
   return r;
 }
 
@@ -103,15 +119,20 @@ v1::JobInfo JobRow::info() const {
   i.set_state(state);
   i.set_reason(reason);
   *i.mutable_spec() = spec;
-  i.set_created_at(created_at);
-  i.set_started_at(started_at);
-  i.set_finished_at(finished_at);
+  // Stored to the millisecond (the queue's order); shown to the second, as everywhere.
+  i.set_created_at(shown_time(created_at));
+  i.set_started_at(shown_time(started_at));
+  i.set_finished_at(shown_time(finished_at));
   i.set_elements(elements);
   i.set_total_steps(total_steps);
   i.set_step(step);
   i.set_last_seq(last_seq);
   i.set_report_json(report_json);
   i.set_resumes(resumes);
+  i.set_time_limit_s(time_limit_s);
+  i.set_elapsed_s(wall_s);
+  i.set_job_data_peak_bytes(peak_bytes);
+  i.set_daemon_rss_peak_bytes(daemon_rss_peak_bytes);
   return i;
 }
 
@@ -136,6 +157,11 @@ JobStore::JobStore(const std::string& path) : db_(path, "job database", "FULL") 
     if (v != kSchemaVersion)
       throw SqliteError(db_.where() + ": schema version " + std::to_string(v) +
                         ", but this mdemd reads version " + std::to_string(kSchemaVersion));
+    if (!db_.has_column("jobs", "time_limit_s")) {
+      Transaction t(db_);
+      db_.exec(kUsageColumns, "cannot add the time-limit and memory columns");
+      t.commit();
+    }
     return;
   }
   Transaction t(db_);
@@ -161,7 +187,8 @@ std::optional<JobRow> JobStore::get(const std::string& id) {
 
 SubmitResult JobStore::submit(const std::string& user, const std::string& request_id,
                               const v1::JobSpec& spec, const std::string& kind, long elements,
-                              long total_steps, int threads, long max_active) {
+                              long total_steps, int threads, long max_active,
+                              double time_limit_s) {
   std::lock_guard lock(db_.mutex());
   Transaction t(db_);
   {
@@ -200,6 +227,10 @@ SubmitResult JobStore::submit(const std::string& user, const std::string& reques
       .bind(9, elements)
       .bind(10, total_steps)
       .bind(11, static_cast<long>(threads))
+      .run();
+  Query(db_, "UPDATE jobs SET time_limit_s = ? WHERE id = ?", "cannot queue the job")
+      .bind(1, time_limit_s)
+      .bind(2, id)
       .run();
   std::vector<v1::JobEvent> ev{state_event(v1::QUEUED, "submitted")};
   append_locked(id, ev);
@@ -329,6 +360,7 @@ long JobStore::append_locked(const std::string& job_id, std::vector<v1::JobEvent
         r.reason = e.state().reason();
         if (r.state == v1::RUNNING && r.started_at.empty()) r.started_at = t;
         if (r.finished()) r.finished_at = t;
+        if (r.state == v1::QUEUED) r.finished_at.clear();  // a TIMEOUT job resumed
         break;
       case v1::JobEvent::kProgress:
         r.last_progress_step = e.progress().step();
@@ -397,6 +429,7 @@ std::vector<v1::JobEvent> JobStore::events(const std::string& job_id, long from_
     v1::JobEvent e;
     if (!e.ParseFromString(body))
       throw SqliteError(db_.where() + ": event of job " + job_id + " is damaged");
+    e.set_time(shown_time(e.time()));  // logged to the millisecond, shown to the second
     bytes += body.size();
     out.push_back(std::move(e));
     if (bytes > max_bytes) break;
@@ -412,6 +445,36 @@ void JobStore::set_checkpoint(const std::string& job_id, long step, double wall_
       .bind(2, wall_s)
       .bind(3, job_id)
       .run();
+}
+
+void JobStore::set_usage(const std::string& job_id, double wall_s, long peak_bytes,
+                         long daemon_rss_peak_bytes) {
+  std::lock_guard lock(db_.mutex());
+  Query(db_,
+        "UPDATE jobs SET wall_s = ?, peak_bytes = MAX(peak_bytes, ?), "
+        "daemon_rss_peak_bytes = MAX(daemon_rss_peak_bytes, ?) WHERE id = ?",
+        "cannot record the job's usage")
+      .bind(1, wall_s)
+      .bind(2, peak_bytes)
+      .bind(3, daemon_rss_peak_bytes)
+      .bind(4, job_id)
+      .run();
+}
+
+bool JobStore::requeue_timeout(const std::string& job_id, double grant_s,
+                               const std::string& reason) {
+  std::lock_guard lock(db_.mutex());
+  Transaction t(db_);
+  const auto row = get_locked(job_id);
+  if (!row || row->state != v1::TIMEOUT) return false;
+  Query(db_, "UPDATE jobs SET time_limit_s = ? WHERE id = ?", "cannot resume the job")
+      .bind(1, grant_s > 0 ? row->wall_s + grant_s : 0.0)
+      .bind(2, job_id)
+      .run();
+  std::vector<v1::JobEvent> ev{state_event(v1::QUEUED, reason)};
+  append_locked(job_id, ev);
+  t.commit();
+  return true;
 }
 
 long JobStore::count(v1::JobState state) {

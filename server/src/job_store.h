@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "mdem/job_state.h"
 #include "mdem/sqlite_db.h"
 #include "mdem/v1/service.pb.h"
 
@@ -33,16 +34,18 @@ struct JobRow {
   int threads = 1;  // fixed at submit: a resumed run must use the same count to be bit-identical
   int resumes = 0;
   long checkpoint_step = 0;  // 0: no checkpoint
-  double wall_s = 0;         // compute time up to the checkpoint
+  double wall_s = 0;         // running time up to the checkpoint (at the end: in all)
+  double time_limit_s = 0;   // limit on wall_s, every run added up; 0 = none
+  long peak_bytes = 0;       // the job's data at its peak (System::memory_bytes), as last recorded
+  long daemon_rss_peak_bytes = 0;  // the daemon's peak resident set then (getrusage)
   // The last frame and snapshot logged, as event_order(stage, step); the last progress step
   // (progress counts steps over all stages).
   long last_frame_step = -1, last_snapshot_step = -1, last_progress_step = -1;
   bool columns_logged = false;
   std::string report_json;
 
-  bool finished() const {
-    return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED;
-  }
+  // Ended (TIMEOUT included: only a ResumeJob queues it again).
+  bool finished() const { return is_final(state); }
   v1::JobInfo info() const;
 };
 
@@ -66,7 +69,7 @@ class JobStore {
   // when the user already has max_active queued or running jobs.
   SubmitResult submit(const std::string& user, const std::string& request_id,
                       const v1::JobSpec& spec, const std::string& kind, long elements,
-                      long total_steps, int threads, long max_active);
+                      long total_steps, int threads, long max_active, double time_limit_s = 0);
   std::optional<JobRow> get(const std::string& id);
   // Newest first; user empty = everyone's.
   std::vector<JobRow> list(const std::string& user, int limit);
@@ -93,8 +96,14 @@ class JobStore {
   // exceeded (at least one event is returned when any exists).
   std::vector<v1::JobEvent> events(const std::string& job_id, long from_seq, int max_count,
                                    std::size_t max_bytes);
-  // Records that a checkpoint of the job at `step` is on disk.
+  // Records that a checkpoint of the job at `step` is on disk, with its running time then.
   void set_checkpoint(const std::string& job_id, long step, double wall_s);
+  // Records the job's running time and memory peaks (each peak only raised, never lowered).
+  void set_usage(const std::string& job_id, double wall_s, long peak_bytes,
+                 long daemon_rss_peak_bytes);
+  // Queues a TIMEOUT job again (a state event with `reason`), its limit becoming its running time
+  // so far plus grant_s (grant_s 0: no limit). False when the job is not in TIMEOUT.
+  bool requeue_timeout(const std::string& job_id, double grant_s, const std::string& reason);
   long count(v1::JobState state);
 
   static std::string now();  // ISO 8601 UTC with milliseconds

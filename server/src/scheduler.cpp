@@ -9,8 +9,10 @@
 #include "checkpoint_file.h"
 #include "mdem/job_runner.h"
 #include "mdem/snapshot_proto.h"
+#include "mdem/process_memory.h"
 #include "mdem/spec_job.h"
 
+#include "mdem/time_text.h"
 namespace mdem::server {
 namespace {
 
@@ -29,6 +31,14 @@ v1::JobEvent state_event(v1::JobState s, const std::string& reason) {
 }
 
 v1::JobEvent report_event(const std::string& json) {
+// Why a job stopped at its wall-time limit, and how to continue it.
+std::string timeout_reason(const JobRow& row, double elapsed_s, long step) {
+  return "wall-time limit " + duration_text(row.time_limit_s) + " reached after " +
+         duration_text(elapsed_s) + " of running time (queue time not counted); stopped at step " +
+         std::to_string(step) + " with its checkpoint kept: `mdem resume " + row.id +
+         " --time-limit T` continues it from there with T more running time";
+}
+
   v1::JobEvent e;
   e.mutable_report()->set_json(json);
   return e;
@@ -82,6 +92,14 @@ void Scheduler::start() {
 void Scheduler::wake() { cv_.notify_all(); }
 
 bool Scheduler::cancel(const std::string& job_id, const std::string& reason) {
+std::optional<Scheduler::Usage> Scheduler::usage(const std::string& job_id) {
+  std::lock_guard lock(mu_);
+  auto it = running_.find(job_id);
+  if (it == running_.end()) return std::nullopt;
+  std::lock_guard u(it->second->usage_mu);
+  return it->second->usage;
+}
+
   std::lock_guard lock(mu_);
   auto it = running_.find(job_id);
   if (it != running_.end()) {
@@ -160,6 +178,28 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
   std::optional<JobRunner> runner;  // the shared build -> run -> classify -> report
   Job* job = nullptr;
   JobState state = v1::SUCCEEDED;
+  {
+    std::lock_guard lock(ctl.usage_mu);
+    ctl.usage = {wall_before, row.peak_bytes,
+                 std::max(row.daemon_rss_peak_bytes, process_rss_peak_bytes())};
+  }
+  // At every poll: the running time so far and the memory peaks (the job's data once its scene
+  // is built; a packing stage's own system is not counted).
+  auto sample = [&] {
+    std::lock_guard lock(ctl.usage_mu);
+    ctl.usage.elapsed_s = wall_before + seconds_since(t0);
+    if (job && scene_built(*job))
+      ctl.usage.peak_bytes =
+          std::max(ctl.usage.peak_bytes, static_cast<long>(job->system().memory_bytes()));
+    ctl.usage.daemon_rss_peak_bytes =
+        std::max(ctl.usage.daemon_rss_peak_bytes, process_rss_peak_bytes());
+    return ctl.usage;
+  };
+  // Into the store, with the running time (before the state event that ends this run).
+  auto record_usage = [&] {
+    const Usage u = sample();
+    store_.set_usage(row.id, u.elapsed_s, u.peak_bytes, u.daemon_rss_peak_bytes);
+  };
   std::string reason;
   try {
     job = &runner.emplace(row.spec, row.threads).job();
@@ -232,7 +272,14 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
         e.mutable_progress()->set_elements(static_cast<long>(job->system().elements().size()));
       ch->push_droppable({std::move(e)}, p.step, false);
     };
-    obs.cancelled = [&] { return ctl.stop.load() != kRun; };
+    obs.cancelled = [&] {
+      const Usage u = sample();
+      if (row.time_limit_s > 0 && u.elapsed_s >= row.time_limit_s) {
+        int running = kRun;  // a cancel or drain that came first stays what stops the job
+        ctl.stop.compare_exchange_strong(running, kTimeout);
+      }
+      return ctl.stop.load() != kRun;
+    };
     obs.checkpoint = [&](long step) {
       if (seconds_since(last_ckpt) < config_.checkpoint_every_s) return;
       // A checkpoint that cannot be written, or whose log cannot be (a full disk): the job goes
@@ -262,8 +309,19 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
     if (r.cancelled && ctl.stop == kDrain) {
       const long step = save(job->system().steps());
       ch->push(state_event(v1::QUEUED, "requeued: " + ctl.reason +
+    if (r.cancelled && ctl.stop == kTimeout) {
+      const long step = save(job->system().steps());
+      record_usage();
+      ch->push(state_event(v1::TIMEOUT, timeout_reason(row, sample().elapsed_s, step)));
+      ch->flush();
+      writer_.close(row.id);
+      spdlog::info("event=job_timeout job={} step={} limit_s={:.1f}", row.id, step,
+                   row.time_limit_s);
+      return;
+    }
                                            "; resumes from the checkpoint at step " +
                                            std::to_string(step)));
+      record_usage();
       ch->flush();
       writer_.close(row.id);
       spdlog::info("event=job_requeued job={} step={}", row.id, step);
@@ -297,6 +355,7 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
     if (job) ch->push(report_event(job_report(*job, row.id, s, reason, wall).dump()));
     ch->push(state_event(s, reason));
     // Through a full disk: the end is logged once it takes writes (a drain gives up; the job,
+    record_usage();
     // still RUNNING in the database, is requeued at the next start).
     if (!ch->flush_retrying([&] { return ctl.stop.load() == kDrain; }))
       throw SqliteError("the daemon stopped before the disk took the job's last events");

@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -41,11 +42,23 @@ class Scheduler {
 
   std::string checkpoint_path(const std::string& job_id) const;
 
+  // What a running job has used so far: its running time (every run added up) and the peak of
+  // its data (System::memory_bytes), as of its last poll.
+  struct Usage {
+    double elapsed_s = 0;
+    long peak_bytes = 0;
+    long daemon_rss_peak_bytes = 0;  // the daemon's, getrusage's ru_maxrss
+  };
+  // The usage of a job running now; nullopt for any other.
+  std::optional<Usage> usage(const std::string& job_id);
+
  private:
-  enum Stop : int { kRun = 0, kCancel = 1, kDrain = 2 };
+  enum Stop : int { kRun = 0, kCancel = 1, kDrain = 2, kTimeout = 3 };
   struct Control {
     std::atomic<int> stop{kRun};
     std::string reason;  // set before stop, read after
+    std::mutex usage_mu;
+    Usage usage;  // under usage_mu: written at the job's polls, read by GetJob/ListJobs
   };
   // Hands queued jobs to the executor while it has room, until stopping.
   void dispatch();

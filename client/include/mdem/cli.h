@@ -43,6 +43,8 @@ int study(const std::vector<std::string>& args, std::ostream& out, std::ostream&
 int submit(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int watch(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int cancel(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+// `mdem resume ID [--time-limit T]`: queues a daemon's TIMEOUT job again from its checkpoint.
+int resume_remote(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
 // Commands on the local results database (client/src/results_commands.cpp); `--db PATH` picks
 // the database. `mdem ls`: the jobs, newest first. `mdem show ID`: one job with its spec and
