@@ -314,6 +314,38 @@ void BM_TwistRopeSteps(benchmark::State& state) {
 }
 BENCHMARK(BM_TwistRopeSteps)->Apply(one_and_two_threads)->Iterations(4);
 
+// Multiple time stepping (IntegratorSettings::respa_k) on the same rope at a fixed fine step of
+// 5 fs (the vdW's own safe outer step there is ~25 fs, so k <= 4): the vdW and its dashpots once
+// per k steps, bonds every step. element_steps_per_s counts inner steps.
+void BM_TwistRopeRespa(benchmark::State& state) {
+  TwistJobSpec spec;
+  spec.loading.torque_max = units::nNnm(64);
+  spec.loading.rate = units::nNnm(1);
+  spec.loading.hold = 100;
+  IntegratorSettings set;
+  set.threads = static_cast<int>(state.range(0));
+  set.local_damping = 0.1;
+  set.dt = 0.005;
+  set.respa_k = static_cast<int>(state.range(1));
+  TwistJob job(spec, set);
+  System& sys = job.system();
+  sys.initialize();
+  sys.run(48);
+  const long steps0 = sys.steps();
+  for (auto _ : state) sys.run(48);
+  const double steps = static_cast<double>(sys.steps() - steps0);
+  const double n = static_cast<double>(sys.elements().size());
+  state.counters["element_steps_per_s"] =
+      benchmark::Counter(n * steps, benchmark::Counter::kIsRate);
+  state.counters["outer_critical_fs"] = sys.critical_outer_dt() * 1e3;
+}
+BENCHMARK(BM_TwistRopeRespa)
+    ->ArgNames({"threads", "respa_k"})
+    ->ArgsProduct({{1}, {1, 2, 4}})
+    ->Iterations(4)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+
 // The CNT contact dashpot alone on the twist job's 91-tube rope with thermal velocities (300 K):
 // one evaluation over the vdW sub-list into a sink, scalar reference (evaluation:0) against the
 // batched SIMD path (evaluation:1), interleaved in one process; ns_per_pair per listed pair.

@@ -17,6 +17,7 @@ const FlagFields& common_flag_fields() {
       {"--dt", "run.dt_ps"},
       {"--safety", "run.safety"},
       {"--threads", "run.threads"},
+      {"--respa-k", "run.respa_k"},
       {"--energy-every", "outputs.energy_every_ps"},
       {"--snapshot-every", "outputs.snapshot_every_ps"},
   };
@@ -48,6 +49,7 @@ void apply_common_flags(const FlagValues& f, v1::JobSpec& spec) {
     spec.mutable_run()->set_dt_ps(spec_number("--dt", val("--dt")));
   if (has("--safety")) spec.mutable_run()->set_safety(spec_number("--safety", val("--safety")));
   if (has("--threads")) spec.mutable_run()->set_threads(spec_int("--threads", val("--threads")));
+  if (has("--respa-k")) spec.mutable_run()->set_respa_k(spec_int("--respa-k", val("--respa-k")));
   if (has("--energy-every"))
     spec.mutable_outputs()->set_energy_every_ps(
         spec_number("--energy-every", val("--energy-every")));
@@ -118,6 +120,8 @@ std::string run_flags_help() {
                    default_of(d::kSafety)) +
          flag_help("--threads N", "OpenMP threads, 0 = all cores", r::kThreads,
                    default_of(d::kThreads)) +
+         flag_help("--respa-k N", "multiple time stepping: slow pair forces every N steps",
+                   r::kRespaK, default_of(d::kRespaK)) +
          flag_help("--energy-every X", "energy/observable frame interval", r::kEnergyEveryPs,
                    default_of(d::kEnergyEveryPs)) +
          flag_help("--snapshot-every X", "snapshot interval, 0 = none", r::kSnapshotEveryPs,

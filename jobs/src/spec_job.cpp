@@ -16,6 +16,7 @@ IntegratorSettings integrator_settings(const v1::JobSpec& spec) {
   if (spec.run().has_dt_ps()) s.dt = spec.run().dt_ps();
   s.safety = spec.run().safety();
   s.threads = spec.run().threads();
+  s.respa_k = spec.run().respa_k();
   return s;
 }
 

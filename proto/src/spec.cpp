@@ -21,6 +21,7 @@ std::string join_errors(const std::vector<FieldError>& errors) {
 void default_run(mdem::v1::RunSettings& run) {
   if (!run.has_safety()) run.set_safety(d::kSafety);
   if (!run.has_threads()) run.set_threads(d::kThreads);
+  if (!run.has_respa_k()) run.set_respa_k(d::kRespaK);
 }
 
 void default_outputs(mdem::v1::Outputs& out) {

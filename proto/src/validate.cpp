@@ -92,6 +92,7 @@ void check_run(const mdem::v1::RunSettings& run, Report& rep) {
   rep.real("run.dt_ps", run.has_dt_ps(), run.dt_ps(), r::kDtPs);
   rep.real("run.safety", run.has_safety(), run.safety(), r::kSafety);
   rep.integer("run.threads", run.has_threads(), run.threads(), r::kThreads);
+  rep.integer("run.respa_k", run.has_respa_k(), run.respa_k(), r::kRespaK);
 }
 
 void check_outputs(const mdem::v1::Outputs& out, Report& rep) {

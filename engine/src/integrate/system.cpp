@@ -117,8 +117,15 @@ inline void kick_anisotropic(const Quat& q, const Vec3& I, Vec3& w, const Vec3& 
 
 // PFC local damping on the unbalanced force of every free DOF of element i: F_k -= α|F_k|
 // sign(v_k), added to the model dampers' forces in fd, td (or to zero without them).
+// With multiple time stepping, net (non-null) adds w·(the held slow forces) to the unbalanced
+// force: the net force F_fast + F_slow, not the kick's impulse (RespaSplit::net_weight).
 inline void local_damping(Elements& E, std::size_t i, double a, bool model_damping, Vec3& fd,
-                          Vec3& td) {
+                          Vec3& td, const RespaSplit* net = nullptr, double w = 0) {
+  Vec3 nf = Vec3::Zero(), nt = Vec3::Zero();
+  if (net) {
+    nf = w * (net->f[i] + net->fd[i]);
+    nt = w * (net->t[i] + net->td[i]);
+  }
   if (!model_damping) {
     fd.setZero();
     td.setZero();
@@ -126,12 +133,14 @@ inline void local_damping(Elements& E, std::size_t i, double a, bool model_dampi
   const auto& dof = E.dof[i];
   for (int k = 0; k < 3; ++k) {
     if (is_free(dof[k])) {
-      const double F = E.f[i][k] + E.f_ext[i][k] + fd[k];
+      double F = E.f[i][k] + E.f_ext[i][k] + fd[k];
+      if (net) F += nf[k];
       const double vk = E.v[i][k];
       fd[k] -= a * std::abs(F) * (vk > 0 ? 1.0 : vk < 0 ? -1.0 : 0.0);
     }
     if (is_free(dof[k + 3])) {
-      const double M = E.t[i][k] + E.t_ext[i][k] + td[k];
+      double M = E.t[i][k] + E.t_ext[i][k] + td[k];
+      if (net) M += nt[k];
       const double wk = E.w[i][k];
       td[k] -= a * std::abs(M) * (wk > 0 ? 1.0 : wk < 0 ? -1.0 : 0.0);
     }
@@ -231,6 +240,9 @@ void System::initialize() {
     bad("guard_energy_tolerance must be finite and > 0");
   if (s.dt && (!std::isfinite(*s.dt) || *s.dt <= 0))
     bad("dt must be finite and > 0 ps (or auto), got " + std::to_string(*s.dt));
+  if (s.respa_k < 1 || s.respa_k > limits::kMaxRespaK)
+    bad("respa_k must be an integer in [1, " + std::to_string(limits::kMaxRespaK) +
+        "] (inner steps per outer step, 1 = off), got " + std::to_string(s.respa_k));
   for (std::size_t i = 0; i < el_.size(); ++i) {
     if (el_.is_isotropic(i)) continue;
     for (int k = 3; k < 6; ++k)
@@ -259,6 +271,7 @@ void System::initialize() {
   const std::size_t n = el_.size();
   sink_.resize(n, threads_, model_damping);
   partial_sums_.assign(threads_, {0.0, 0.0, 0.0, 0.0});
+  respa_.setup(s.respa_k, n);
   fd_.assign(n, Vec3::Zero());
   td_.assign(n, Vec3::Zero());
 
@@ -281,6 +294,16 @@ void System::initialize() {
       bad("dt: auto needs at least one bond or contact to derive a step from; give dt in ps");
     dt_ = max_safe_dt();
   }
+  dt_critical_outer_ =
+      respa_.on() ? compute_critical_dt(true) : std::numeric_limits<double>::infinity();
+  if (s.check_dt && respa_.k() * dt_ > s.safety * dt_critical_outer_) {
+    std::ostringstream m;
+    m << "outer step respa_k x dt = " << respa_.k() << " x " << dt_ << " ps is above the slow "
+      << "forces' safe limit " << s.safety * dt_critical_outer_ << " ps (safety " << s.safety
+      << " x their critical step " << dt_critical_outer_ << " ps); use respa_k <= "
+      << std::max(1, static_cast<int>(s.safety * dt_critical_outer_ / dt_)) << " at this dt";
+    throw ConfigError(m.str());
+  }
 
   update_kinetic();
   start_ledger();
@@ -297,9 +320,9 @@ void System::start_ledger() {
 }
 
 void System::restart_clock() {
-  refresh();
   time_ = 0;
-  steps_ = 0;
+  steps_ = 0;  // first: step 0 opens an outer step (multiple time stepping)
+  refresh();
   start_ledger();
 }
 
@@ -320,15 +343,17 @@ void System::refresh_booking_work() {
   update_energy_scale();
 }
 
-void System::compute_forces(bool with_local_damping, StepTimers* timers) {
+void System::compute_forces(bool with_local_damping, StepTimers* timers, bool in_step) {
   Clock::time_point mark;
   if (timers) mark = Clock::now();
   update_pairs();
   if (timers) lap(mark, timers->neighbor_s);
   sink_.clear();
   for (const auto& m : models_)
-    if (inactive_.empty() || model_active(m.get())) m->compute(el_, pairs_.list_of(m.get()), sink_);
+    if (respa_.inner(*m) && (inactive_.empty() || model_active(m.get())))
+      m->compute(el_, pairs_.list_of(m.get()), sink_);
   ledger_.potential = sink_.reduce(el_.f, el_.t, fd_, td_);
+  if (respa_.on()) add_slow_forces(in_step);
   if (timers) lap(mark, timers->pair_s);
 
   const double a = settings_.local_damping;
@@ -346,8 +371,30 @@ void System::compute_forces(bool with_local_damping, StepTimers* timers) {
   if (!with_local_damping) return;  // the caller's pass over the elements adds it
   const long n = static_cast<long>(el_.size());
   const bool model_damping = sink_.has_damping();
+  const RespaSplit* net = respa_.on() ? &respa_ : nullptr;
+  const double w = respa_.net_weight(steps_);
 #pragma omp parallel for schedule(static) if (n >= kParallelMinItems)
-  for (long i = 0; i < n; ++i) local_damping(el_, i, a, model_damping, fd_[i], td_[i]);
+  for (long i = 0; i < n; ++i) local_damping(el_, i, a, model_damping, fd_[i], td_[i], net, w);
+}
+
+void System::add_slow_forces(bool in_step) {
+  const bool closes = respa_.closes_outer_step(steps_);
+  if (closes || !in_step) {
+    sink_.clear();
+    for (const auto& m : models_)
+      if (respa_.slow(*m) && (inactive_.empty() || model_active(m.get())))
+        m->compute(el_, pairs_.list_of(m.get()), sink_);
+    respa_.tally = sink_.reduce(respa_.f, respa_.t, respa_.fd, respa_.td);
+    respa_.tags = el_.tag;
+  } else {
+    respa_.follow(el_);  // the elements were reordered since (memory order)
+  }
+  if (closes) {
+    respa_.add_impulse(el_.f, el_.t, fd_, td_, sink_.has_damping());
+    ledger_.potential += respa_.tally;
+  } else {
+    ledger_.potential += respa_.held();
+  }
 }
 
 void System::update_kinetic() {
@@ -361,11 +408,11 @@ void System::update_kinetic() {
   ledger_.kinetic_rotational = kr;
 }
 
-double System::compute_critical_dt() const {
+double System::compute_critical_dt(bool slow_only) const {
   StiffnessSums s;
   s.reset(el_.size());
   for (const auto& m : models_)
-    if (inactive_.empty() || model_active(m.get()))
+    if ((!slow_only || respa_.slow(*m)) && (inactive_.empty() || model_active(m.get())))
       m->add_stiffness(el_, pairs_.list_of(m.get()), s);
   double dt = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < el_.size(); ++i) {
@@ -407,6 +454,9 @@ std::string System::unstable_cause() const {
   if (dt_ > max_safe_dt())
     return "dt is above the safe limit " + std::to_string(max_safe_dt()) +
            " ps: lower dt, or use dt: auto";
+  if (respa_.k() * dt_ > settings_.safety * dt_critical_outer_)
+    return "the outer step respa_k x dt is above the slow forces' safe limit " +
+           std::to_string(settings_.safety * dt_critical_outer_) + " ps: lower respa_k";
   return "dt is within the safe limit (from the stiffness at the start), so the step alone is "
          "not the cause: check for deeply overlapping or coincident elements (they stiffen "
          "contacts past that limit: lower safety), a load that runs away, or a fragment torn "
@@ -497,11 +547,13 @@ void System::run(long nsteps) {
     long bad = -1;
     double kt = 0, kr = 0;
     ordered_sums<4>(
+    const RespaSplit* net = respa_.on() ? &respa_ : nullptr;
+    const double w_net = respa_.net_weight(steps_);
         n, partial_sums_, {&work, &diss, &kt, &kr},
         [&](long i, std::array<double, 4>& sums) __attribute__((always_inline)) {
           double& work = sums[0];
           double& diss = sums[1];
-          if (local) local_damping(E, i, a_local, model_damping, fd_[i], td_[i]);
+          if (local) local_damping(E, i, a_local, model_damping, fd_[i], td_[i], net, w_net);
           const auto& dof = E.dof[i];
           for (int k = 0; k < 3; ++k)
             second_half_kick(dof[k], E.v[i][k], E.f[i][k], E.f_ext[i][k], fd_[i][k],
@@ -536,7 +588,9 @@ void System::run(long nsteps) {
     ledger_.dissipated += diss + ledger_.potential.released;
     ledger_.kinetic_translational = kt;
     ledger_.kinetic_rotational = kr;
-    if (steps_ % settings_.guard_every == 0) check_energy_growth();
+    // The books close only where an outer step does (the slow energy is held in between).
+    if (respa_.closes_outer_step(steps_) && steps_ % settings_.guard_every < respa_.k())
+      check_energy_growth();
     lap(mark, timers.integrate_s);
   }
 }

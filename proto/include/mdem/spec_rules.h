@@ -45,6 +45,7 @@ std::string number_text(double v);
 namespace defaults {
 inline constexpr double kSafety = 0.6;
 inline constexpr int kThreads = 0;
+inline constexpr int kRespaK = 1;
 inline constexpr double kEnergyEveryPs = 1.0;
 inline constexpr double kSnapshotEveryPs = 10.0;
 inline constexpr unsigned long long kSeed = 1;
@@ -98,6 +99,7 @@ namespace ranges {
 inline constexpr Range kDtPs = closed(1e-6, 1.0, "ps");
 inline constexpr Range kSafety = above(0.0, 1.0, "of the critical step");
 inline constexpr Range kThreads = closed(0, limits::kMaxThreads, "threads", "0 = all cores");
+inline constexpr Range kRespaK = closed(1, limits::kMaxRespaK, "steps per outer step", "1 = off");
 inline constexpr Range kEnergyEveryPs = above(0.0, 1e6, "ps");
 inline constexpr Range kSnapshotEveryPs = closed(0.0, 1e6, "ps", "0 = no snapshots");
 inline constexpr Range kAngleDeg = below(0.0, 360.0, "degrees");

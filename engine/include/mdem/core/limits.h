@@ -7,6 +7,9 @@ namespace mdem::limits {
 // Worker threads of one System (IntegratorSettings::threads, 0 = all cores).
 inline constexpr int kMaxThreads = 256;
 
+// Inner steps per outer step of multiple time stepping (IntegratorSettings::respa_k, 1 = off).
+inline constexpr int kMaxRespaK = 16;
+
 // Largest damping ratio of a contact or bond dashpot (ViscousContactDamping, GrainDashpots):
 // critical damping. The critical time step assumes an under-damped dashpot; above 1 the explicit
 // damping term's own stability limit, dt < 1 / (ratio x omega), would undercut it.

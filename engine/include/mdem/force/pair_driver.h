@@ -286,6 +286,12 @@ class PairModel : public ForceModel {
     return k_.excludes(el, i, j);
   }
   bool dissipative() const override { return K::kDissipative; }
+  Timescale timescale() const override {
+    if constexpr (requires { K::kTimescale; })
+      return K::kTimescale;
+    else
+      return Timescale::Fast;
+  }
   // Kernels hold no element indices between evaluations (at most a per-evaluation cache, as the
   // vdW kernel's axes; the grain dashpots read the bond model, which remaps its own): a pair model
   // follows a reordering with nothing to remap, its pairs come from the rebuilt sub-list.

@@ -4,6 +4,7 @@
 // bookkeeping, the critical-step check and the run guard.
 #include <array>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -14,6 +15,7 @@
 #include "mdem/core/elements.h"
 #include "mdem/core/energy.h"
 #include "mdem/force/force_model.h"
+#include "mdem/integrate/respa.h"
 #include "mdem/integrate/step_timers.h"
 #include "mdem/io/state_io.h"
 #include "mdem/neighbor/memory_order.h"
@@ -82,6 +84,10 @@ struct IntegratorSettings {
 };
 
 class System {
+  // Multiple time stepping (respa.h): slow models (Timescale::Slow) once every respa_k steps of dt
+  // as impulses, fast ones every step. [1, limits::kMaxRespaK]; 1 = off (plain velocity Verlet).
+  // respa_k·dt must stay within safety × the slow models' critical step (else ConfigError).
+  int respa_k = 1;
  public:
   explicit System(Elements el, IntegratorSettings s = {});
   ~System();
@@ -157,6 +163,9 @@ class System {
   int threads() const { return threads_; }
 
   // Reorders the elements (new_to_old, as Elements::reorder) and remaps every index the system,
+  // With respa_k > 1: the critical step of the slow models alone, which bounds the outer step
+  // respa_k·dt (infinite without slow models or with respa_k = 1).
+  double critical_outer_dt() const { return dt_critical_outer_; }
   // its models and updaters hold; the neighbour sub-lists are rebuilt at the next evaluation.
   // Throws ConfigError, changing nothing, when a model or updater does not follow a reordering,
   // and std::invalid_argument when new_to_old is not a permutation of the elements.
@@ -210,14 +219,19 @@ class System {
   // pre-relaxation (tensile.md §3.3), whose velocities the caller zeroes first. Initializes first
   // if needed.
   void restart_clock();
-  // Critical step of the current configuration (does not change dt).
-  double compute_critical_dt() const;
+  // Critical step of the current configuration (does not change dt); of the slow models alone
+  // with slow_only (multiple time stepping's outer step).
+  double compute_critical_dt(bool slow_only = false) const;
 
  private:
   // Forces, energies and damping of the current state; with_local_damping false leaves the
   // local damping to the caller's own pass over the elements (run()'s second half kick). With
   // timers, the neighbour-list update and the force evaluation are timed into them.
-  void compute_forces(bool with_local_damping = true, StepTimers* timers = nullptr);
+  // In a step (in_step), the slow models of multiple time stepping are evaluated only when the
+  // evaluation closes an outer step; outside (initialize, refresh) always, for the energy books.
+  void compute_forces(bool with_local_damping = true, StepTimers* timers = nullptr,
+                      bool in_step = false);
+  void add_slow_forces(bool in_step);
   // Memory order (system_order.cpp). update_pairs: the pair table's update, reordering the
   // elements along the curve of settings_.memory_order first when a sub-list is stale.
   void update_pairs();
@@ -241,7 +255,8 @@ class System {
   std::vector<std::shared_ptr<Updater>> updaters_;
   std::vector<const ForceModel*> inactive_;  // models switched off by the current stage
   std::unique_ptr<Domain> domain_ = std::make_unique<Domain>();  // models point to it
-  PairTable pairs_;  // per-kind-pair table: the pair models' neighbour sub-lists
+  PairTable pairs_;   // per-kind-pair table: the pair models' neighbour sub-lists
+  RespaSplit respa_;  // multiple time stepping's slow forces (respa_k > 1)
   ForceSink sink_;
   std::vector<Vec3> fd_, td_;  // damping force / torque (model dampers + local damping)
   std::vector<Vec3> f_prev_, t_prev_, fext_prev_, text_prev_;  // for work bookkeeping
@@ -254,6 +269,7 @@ class System {
   long steps_ = 0;
   std::size_t reorders_ = 0;
   int threads_ = 1;
+  double dt_critical_outer_ = std::numeric_limits<double>::infinity();
   bool initialized_ = false;
   bool dissipative_ = false;
   bool local_damping_was_on_ = false;  // fd_/td_ may hold local damping to clear

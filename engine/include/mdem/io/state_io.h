@@ -134,6 +134,7 @@ class StateReader {
 // 3: element tags (checked against the job's, like the other element properties).
 // 4: the energy ledger's nanoparticle term split into NP–CNT and NP–NP (one more stored term).
 // 5: the elements' topology (bonds, tube chains, rings) and groups, loaded in place of the job's.
+// 6: multiple time stepping: respa_k, and the slow models' energy held between outer steps.
 // 7: element arrays in tag order (tags first), then their memory order (memory_order.h).
 inline constexpr std::uint32_t kCheckpointVersion = 7;
 

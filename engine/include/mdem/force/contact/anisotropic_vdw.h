@@ -115,6 +115,7 @@ const char* vdw_simd_target();
 class VdwKernel {
  public:
   static constexpr bool kDissipative = false;
+  static constexpr Timescale kTimescale = Timescale::Slow;  // r-RESPA outer step
   static constexpr bool kTorques = true;
   static constexpr EnergyTerm kTerm = EnergyTerm::Vdw;
 

@@ -36,6 +36,7 @@ struct NpCntParams {
 class NpCntKernel {
  public:
   static constexpr bool kDissipative = false;
+  static constexpr Timescale kTimescale = Timescale::Slow;  // r-RESPA outer step
   static constexpr bool kTorques = true;  // on the segment only
   static constexpr EnergyTerm kTerm = EnergyTerm::NpCnt;
 

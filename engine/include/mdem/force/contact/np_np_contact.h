@@ -31,6 +31,7 @@ struct NpNpParams {
 class NpNpKernel {
  public:
   static constexpr bool kDissipative = false;
+  static constexpr Timescale kTimescale = Timescale::Slow;  // r-RESPA outer step
   static constexpr bool kTorques = false;
   static constexpr EnergyTerm kTerm = EnergyTerm::NpNp;
 

@@ -32,6 +32,7 @@ struct NpDampingParams {
 class NpDashpotKernel {
  public:
   static constexpr bool kDissipative = true;
+  static constexpr Timescale kTimescale = Timescale::Slow;  // r-RESPA outer step
   static constexpr bool kTorques = false;
   static constexpr EnergyTerm kTerm = EnergyTerm::NpCnt;  // unused: dissipative
 

@@ -34,6 +34,7 @@ struct ContactDampingParams {
 class ContactDampingKernel {
  public:
   static constexpr bool kDissipative = true;
+  static constexpr Timescale kTimescale = Timescale::Slow;  // r-RESPA outer step
   static constexpr bool kTorques = false;
   static constexpr EnergyTerm kTerm = EnergyTerm::Vdw;  // unused: dissipative
 
