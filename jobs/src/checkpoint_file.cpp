@@ -1,4 +1,4 @@
-#include "checkpoint_file.h"
+#include "mdem/checkpoint_file.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -10,14 +10,14 @@
 #include <cstring>
 #include <filesystem>
 
-#include "fault_injection.h"
-
-namespace mdem::server {
+namespace mdem {
 namespace {
 
 constexpr char kMagic[8] = {'M', 'D', 'E', 'M', 'C', 'K', 'P', 'T'};
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 1;                    // state only
+constexpr std::uint32_t kRecordVersion = 2;              // state and a record
 constexpr std::size_t kHeaderBytes = 8 + 4 + 8 + 8 + 4;  // magic, version, step, length, crc
+constexpr std::size_t kRecordHeaderBytes = 8 + 4;        // format 2: record length, crc
 
 void put(std::string& out, std::uint64_t v, int bytes) {
   for (int b = 0; b < bytes; ++b) out.push_back(static_cast<char>((v >> (8 * b)) & 0xff));
@@ -60,18 +60,23 @@ void write_all(int fd, const std::string& bytes, const std::string& path) {
 }  // namespace
 
 void write_checkpoint(const std::string& path, const CheckpointData& data) {
+  const bool with_record = !data.record.empty();
   std::string header(kMagic, 8);
-  put(header, kVersion, 4);
+  put(header, with_record ? kRecordVersion : kVersion, 4);
   put(header, static_cast<std::uint64_t>(data.step), 8);
   put(header, data.state.size(), 8);
   put(header, crc_of(data.state), 4);
+  if (with_record) {
+    put(header, data.record.size(), 8);
+    put(header, crc_of(data.record), 4);
+  }
   const std::string tmp = path + ".tmp";
-  if (auto injected = injected_write_failure()) fail(tmp, "cannot write: " + *injected);
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
   if (fd < 0) fail(tmp, std::string("cannot create: ") + std::strerror(errno));
   try {
     write_all(fd, header, tmp);
     write_all(fd, data.state, tmp);
+    write_all(fd, data.record, tmp);
     if (::fsync(fd) != 0) fail(tmp, std::string("cannot flush: ") + std::strerror(errno));
   } catch (...) {
     ::close(fd);
@@ -130,19 +135,32 @@ CheckpointData read_checkpoint(const std::string& path) {
     fail(path, "truncated: " + std::to_string(bytes.size()) + " bytes, shorter than its header");
   if (std::memcmp(bytes.data(), kMagic, 8) != 0) fail(path, "not an mdem checkpoint (bad magic)");
   const auto version = static_cast<std::uint32_t>(get(bytes, 8, 4));
-  if (version != kVersion)
-    fail(path, "format version " + std::to_string(version) + ", this mdemd reads " +
-                   std::to_string(kVersion));
+  if (version != kVersion && version != kRecordVersion)
+    fail(path, "format version " + std::to_string(version) + ", this build reads versions " +
+                   std::to_string(kVersion) + " and " + std::to_string(kRecordVersion));
+  const std::size_t header = kHeaderBytes + (version == kRecordVersion ? kRecordHeaderBytes : 0);
+  if (bytes.size() < header)
+    fail(path, "truncated: " + std::to_string(bytes.size()) + " bytes, shorter than its header");
   CheckpointData d;
   d.step = static_cast<long>(get(bytes, 12, 8));
   const std::uint64_t len = get(bytes, 20, 8);
   const auto crc = static_cast<std::uint32_t>(get(bytes, 28, 4));
-  if (len != bytes.size() - kHeaderBytes)
-    fail(path, "truncated or padded: header says " + std::to_string(len) + " bytes of state, " +
-                   std::to_string(bytes.size() - kHeaderBytes) + " present");
-  d.state = bytes.substr(kHeaderBytes);
+  const std::uint64_t record_len = version == kRecordVersion ? get(bytes, 32, 8) : 0;
+  const auto record_crc =
+      version == kRecordVersion ? static_cast<std::uint32_t>(get(bytes, 40, 4)) : crc_of("");
+  // Compared without adding: a corrupt length may be near 2^64.
+  const std::size_t present = bytes.size() - header;
+  if (len > present || record_len != present - len)
+    fail(path,
+         "truncated or padded: header says " + std::to_string(len) + " bytes of state" +
+             (version == kRecordVersion ? " and " + std::to_string(record_len) + " bytes of record"
+                                        : std::string()) +
+             ", " + std::to_string(present) + " present");
+  d.state = bytes.substr(header, len);
   if (crc_of(d.state) != crc) fail(path, "damaged: CRC-32 mismatch");
+  d.record = bytes.substr(header + len);
+  if (crc_of(d.record) != record_crc) fail(path, "damaged: CRC-32 mismatch of its record");
   return d;
 }
 
-}  // namespace mdem::server
+}  // namespace mdem

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "mdem/job_state.h"
+#include "mdem/event_order.h"  // event_order: frames and snapshots by (stage, step)
 #include "mdem/sqlite_db.h"
 #include "mdem/v1/service.pb.h"
 
@@ -18,11 +19,6 @@ namespace mdem::server {
 struct LimitError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
-
-// Where a frame or snapshot lies in a job's run: by stage, then by step inside it. Steps alone
-// do not order a job whose stages restart their clock (the tensile job after its
-// pre-relaxation); a log from before stages were recorded (stage 0) orders by step.
-inline long event_order(int stage, long step) { return (static_cast<long>(stage) << 40) + step; }
 
 struct JobRow {
   std::string id, user, request_id, kind, name;

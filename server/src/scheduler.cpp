@@ -6,7 +6,8 @@
 #include <filesystem>
 #include <optional>
 
-#include "checkpoint_file.h"
+#include "fault_injection.h"
+#include "mdem/checkpoint_file.h"
 #include "mdem/job_runner.h"
 #include "mdem/snapshot_proto.h"
 #include "mdem/process_memory.h"
@@ -230,7 +231,9 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
     auto save = [&](long step) {
       ch->flush();  // the log reaches at least `step` before the checkpoint claims it
       const double wall = wall_before + seconds_since(t0);
-      write_checkpoint(ckpt, {step, save_checkpoint(*job)});
+      if (auto injected = injected_write_failure())
+        throw CheckpointFileError("checkpoint '" + ckpt + ".tmp': cannot write: " + *injected);
+      write_checkpoint(ckpt, {step, save_checkpoint(*job), {}});
       // The store counts steps over all stages, as progress does: a checkpoint taken while a
       // scene-building stage runs (time-series step 0) still reads as one to resume from.
       store_.set_checkpoint(row.id, job->overall_step(), wall);
