@@ -459,7 +459,6 @@ v1::JobInfo JobClient::cancel(const std::string& job_id) {
   return info;
 }
 
-}  // namespace mdem::cli
 v1::JobInfo JobClient::resume(const std::string& job_id, double time_limit_s) {
   v1::ResumeJobRequest request;
   request.set_job_id(job_id);
@@ -470,3 +469,4 @@ v1::JobInfo JobClient::resume(const std::string& job_id, double time_limit_s) {
   return info;
 }
 
+}  // namespace mdem::cli

@@ -665,9 +665,9 @@ int run_submit(const std::vector<std::string>& args, std::ostream& out, std::ost
     request_id = new_request_id();
   }
   const double timeout = reconnect_timeout(given);
+  const double time_limit_s = time_limit_flag(given);
   ConnectionSettings settings = resolve_connection(given, process_env());
   ResultsStore store(db_path(given));  // before submitting: a job is never left unrecorded
-  const double time_limit_s = time_limit_flag(given);
 
   if (!as_json)
     err << "submitting a " << kind->name << " job to mdemd at " << settings.server
@@ -676,9 +676,9 @@ int run_submit(const std::vector<std::string>& args, std::ostream& out, std::ost
   v1::SubmitJobRequest request;
   request.set_request_id(request_id);
   *request.mutable_spec() = spec;
+  request.set_time_limit_s(time_limit_s);
   v1::SubmitJobResponse response;
   try {
-  request.set_time_limit_s(time_limit_s);
     response = client.submit(request);
   } catch (const RemoteError& e) {
     if (e.exit_code != kConnection) throw;
@@ -713,8 +713,6 @@ int run_submit(const std::vector<std::string>& args, std::ostream& out, std::ost
   return Watcher(client, store, info.job_id(), as_json, timeout, out, err).run();
 }
 
-int run_watch(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  FlagSpec fs{{"--db", "--reconnect-timeout"}, {"--json"}};
 int run_resume_timeout(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   FlagSpec fs{{"--db", "--reconnect-timeout", "--time-limit"}, {"--json", "--watch"}};
   add_connection_flags(fs);
@@ -756,6 +754,8 @@ int run_resume_timeout(const std::vector<std::string>& args, std::ostream& out, 
   return Watcher(client, store, info.job_id(), as_json, timeout, out, err).run();
 }
 
+int run_watch(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  FlagSpec fs{{"--db", "--reconnect-timeout"}, {"--json"}};
   add_connection_flags(fs);
   auto [given_id, given] = parse_id_and_flags(args, fs);
   const bool as_json = given.count("--json") > 0;
@@ -854,8 +854,6 @@ std::string bytes_text(long bytes) {
   return buf;
 }
 
-std::string progress_text(const v1::JobInfo& info) {
-  if (info.total_steps() <= 0) return "-";
 // Memory as sacct's MaxRSS would mean it for a job of its own, named for what it is: the peak of
 // the job's simulation data, and the daemon's (all jobs') peak resident set for context.
 std::string memory_text(const v1::JobInfo& info) {
@@ -864,6 +862,8 @@ std::string memory_text(const v1::JobInfo& info) {
          bytes_text(info.daemon_rss_peak_bytes());
 }
 
+std::string progress_text(const v1::JobInfo& info) {
+  if (info.total_steps() <= 0) return "-";
   return std::to_string(info.step() * 100 / info.total_steps()) + "%";
 }
 
@@ -1012,13 +1012,13 @@ int watch(const std::vector<std::string>& args, std::ostream& out, std::ostream&
                  [&] { return run_watch(args, out, err); });
 }
 
-int cancel(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  if (names_study(args) && !wants_help(args)) return cancel_study(args, out, err);
 int resume_remote(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   return guarded("resume", args, out, err, print_resume_help,
                  [&] { return run_resume_timeout(args, out, err); });
 }
 
+int cancel(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  if (names_study(args) && !wants_help(args)) return cancel_study(args, out, err);
   return guarded("cancel", args, out, err, print_cancel_help,
                  [&] { return run_cancel(args, out, err); });
 }

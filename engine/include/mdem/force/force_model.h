@@ -78,12 +78,6 @@ struct StiffnessSums {
   }
 };
 
-// How often multiple time stepping (r-RESPA, IntegratorSettings::respa_k) evaluates a model: Fast
-// every inner step (bonds, stiff contacts, walls), Slow once per outer step of respa_k inner steps,
-// applied as impulses at the outer step's start and end (soft pair forces: vdW, the NP contacts,
-// and the dashpots that damp exactly their pairs).
-enum class Timescale { Fast, Slow };
-
 // A model that holds element indices between evaluations remaps them when the system reorders
 // its elements (ElementIndexHolder, core/index_holder.h).
 class ForceModel : public ElementIndexHolder {
@@ -106,8 +100,6 @@ class ForceModel : public ElementIndexHolder {
 
   // True for velocity-dependent (damping) models, which write to the sink's damping buffers.
   virtual bool dissipative() const { return false; }
-  // Fast unless the model says its forces vary slowly enough for the outer step (Timescale).
-  virtual Timescale timescale() const { return Timescale::Fast; }
 
   // Adds forces, torques and energy of the current state to the sink, using the thread-local
   // slot of omp_get_thread_num() inside its own `#pragma omp parallel for schedule(static)`.
@@ -123,6 +115,10 @@ class ForceModel : public ElementIndexHolder {
   void bind_domain(const Domain* d) { domain_ = d ? d : &kOpenDomain; }
   const Domain& domain() const { return *domain_; }
 
+  // Bytes of the model's own per-element or per-pair data (bonds, cached axes; capacities), for
+  // System::memory_bytes; 0 for a model that holds only parameters.
+  virtual std::size_t memory_bytes() const { return 0; }
+
   // State that changes during a run (a bond's plastic slip, broken flags), for checkpoints; the
   // system saves and loads it in a section named after the model. Stateless models keep these.
   virtual void save_state(StateWriter&) const {}
@@ -133,8 +129,5 @@ class ForceModel : public ElementIndexHolder {
 };
 
 using ForceModelPtr = std::unique_ptr<ForceModel>;
-  // Bytes of the model's own per-element or per-pair data (bonds, cached axes; capacities), for
-  // System::memory_bytes; 0 for a model that holds only parameters.
-  virtual std::size_t memory_bytes() const { return 0; }
 
 }  // namespace mdem
