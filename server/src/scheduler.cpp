@@ -9,11 +9,11 @@
 #include "fault_injection.h"
 #include "mdem/checkpoint_file.h"
 #include "mdem/job_runner.h"
-#include "mdem/snapshot_proto.h"
 #include "mdem/process_memory.h"
+#include "mdem/snapshot_proto.h"
 #include "mdem/spec_job.h"
-
 #include "mdem/time_text.h"
+
 namespace mdem::server {
 namespace {
 
@@ -31,7 +31,6 @@ v1::JobEvent state_event(v1::JobState s, const std::string& reason) {
   return e;
 }
 
-v1::JobEvent report_event(const std::string& json) {
 // Why a job stopped at its wall-time limit, and how to continue it.
 std::string timeout_reason(const JobRow& row, double elapsed_s, long step) {
   return "wall-time limit " + duration_text(row.time_limit_s) + " reached after " +
@@ -40,6 +39,7 @@ std::string timeout_reason(const JobRow& row, double elapsed_s, long step) {
          " --time-limit T` continues it from there with T more running time";
 }
 
+v1::JobEvent report_event(const std::string& json) {
   v1::JobEvent e;
   e.mutable_report()->set_json(json);
   return e;
@@ -92,7 +92,6 @@ void Scheduler::start() {
 
 void Scheduler::wake() { cv_.notify_all(); }
 
-bool Scheduler::cancel(const std::string& job_id, const std::string& reason) {
 std::optional<Scheduler::Usage> Scheduler::usage(const std::string& job_id) {
   std::lock_guard lock(mu_);
   auto it = running_.find(job_id);
@@ -101,6 +100,7 @@ std::optional<Scheduler::Usage> Scheduler::usage(const std::string& job_id) {
   return it->second->usage;
 }
 
+bool Scheduler::cancel(const std::string& job_id, const std::string& reason) {
   std::lock_guard lock(mu_);
   auto it = running_.find(job_id);
   if (it != running_.end()) {
@@ -178,7 +178,6 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
   double wall_before = row.wall_s;
   std::optional<JobRunner> runner;  // the shared build -> run -> classify -> report
   Job* job = nullptr;
-  JobState state = v1::SUCCEEDED;
   {
     std::lock_guard lock(ctl.usage_mu);
     ctl.usage = {wall_before, row.peak_bytes,
@@ -201,6 +200,7 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
     const Usage u = sample();
     store_.set_usage(row.id, u.elapsed_s, u.peak_bytes, u.daemon_rss_peak_bytes);
   };
+  JobState state = v1::SUCCEEDED;
   std::string reason;
   try {
     job = &runner.emplace(row.spec, row.threads).job();
@@ -309,9 +309,6 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
       return ctl.reason + "; results up to step " + std::to_string(j.system().steps()) +
              " (t = " + std::to_string(j.system().time()) + " ps) are kept";
     });
-    if (r.cancelled && ctl.stop == kDrain) {
-      const long step = save(job->system().steps());
-      ch->push(state_event(v1::QUEUED, "requeued: " + ctl.reason +
     if (r.cancelled && ctl.stop == kTimeout) {
       const long step = save(job->system().steps());
       record_usage();
@@ -322,9 +319,12 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
                    row.time_limit_s);
       return;
     }
+    if (r.cancelled && ctl.stop == kDrain) {
+      const long step = save(job->system().steps());
+      record_usage();
+      ch->push(state_event(v1::QUEUED, "requeued: " + ctl.reason +
                                            "; resumes from the checkpoint at step " +
                                            std::to_string(step)));
-      record_usage();
       ch->flush();
       writer_.close(row.id);
       spdlog::info("event=job_requeued job={} step={}", row.id, step);
@@ -355,10 +355,10 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
   const double wall = wall_before + seconds_since(t0);
   try {
     const JobState s = state;
+    record_usage();
     if (job) ch->push(report_event(job_report(*job, row.id, s, reason, wall).dump()));
     ch->push(state_event(s, reason));
     // Through a full disk: the end is logged once it takes writes (a drain gives up; the job,
-    record_usage();
     // still RUNNING in the database, is requeued at the next start).
     if (!ch->flush_retrying([&] { return ctl.stop.load() == kDrain; }))
       throw SqliteError("the daemon stopped before the disk took the job's last events");
