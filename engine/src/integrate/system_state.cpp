@@ -59,6 +59,31 @@ void save_elements(StateWriter& w, const Elements& el) {
   w.put(el.tag);  // the memory order
 }
 
+// A loaded state is run only if a run could have reached it (a tampered or damaged checkpoint
+// whose CRC was made to match is refused, not run): finite positions, orientations, velocities,
+// loads and forces, and no element moving more than its radius or turning more than a radian in
+// one step of dt - the integrator's own runaway limit.
+void check_loaded_elements(const StateReader& r, const Elements& el, double dt) {
+  auto element = [](std::size_t i) { return " of element " + std::to_string(i); };
+  for (std::size_t i = 0; i < el.size(); ++i) {
+    if (!el.x[i].allFinite()) r.fail("x", "is not finite" + element(i));
+    if (!el.q[i].coeffs().allFinite() || !(el.q[i].norm() > 0))
+      r.fail("q", "is not a finite, non-zero quaternion" + element(i));
+    if (!el.v[i].allFinite()) r.fail("v", "is not finite" + element(i));
+    if (!el.w[i].allFinite()) r.fail("w", "is not finite" + element(i));
+    if (!el.f_ext[i].allFinite() || !el.t_ext[i].allFinite() || !el.f[i].allFinite() ||
+        !el.t[i].allFinite())
+      r.fail("f", "a force or torque is not finite" + element(i));
+    if (!(el.v[i].norm() * dt <= el.radius[i]))
+      r.fail("v", std::to_string(el.v[i].norm()) + " nm/ps" + element(i) + " moves it " +
+                      std::to_string(el.v[i].norm() * dt) + " nm in one step, more than its " +
+                      "radius " + std::to_string(el.radius[i]) + " nm (no stable run has it)");
+    if (!(el.w[i].norm() * dt <= 1.0))
+      r.fail("w", std::to_string(el.w[i].norm()) + " rad/ps" + element(i) +
+                      " turns it more than a radian in one step (no stable run has it)");
+  }
+}
+
 // Loads into el, which must be in tag order; returns the saved memory order (tags), unchecked.
 std::vector<std::uint64_t> load_elements(StateReader& r, Elements& el) {
   r.begin("elements");
@@ -274,6 +299,10 @@ void System::load_state(StateReader& r) {
   dt_ = r.get<double>("dt");
   dt_critical_ = r.get<double>("dt_critical");
   steps_ = r.get<long>("steps");
+  if (!std::isfinite(time_) || time_ < 0) r.fail("time", "must be finite and >= 0");
+  if (!std::isfinite(dt_) || !(dt_ > 0)) r.fail("dt", "must be finite and > 0");
+  if (std::isnan(dt_critical_) || !(dt_critical_ > 0)) r.fail("dt_critical", "must be > 0");
+  if (steps_ < 0) r.fail("steps", "must be >= 0");
   energy_scale_ = r.get<double>("energy_scale");
   initial_kinetic_ = r.get<double>("initial_kinetic");
   initial_stored_ = r.get<double>("initial_stored");
@@ -286,6 +315,7 @@ void System::load_state(StateReader& r) {
     if (const std::string why = reorder_blocker(); !why.empty()) r.fail("memory order", why);
     reorder_elements(memory);
   }
+  check_loaded_elements(r, el_, dt_);
   load_topology(r, el_);
   load_groups(r, el_);
   load_ledger(r, ledger_);

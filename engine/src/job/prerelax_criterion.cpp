@@ -10,6 +10,7 @@
 #include "mdem/force/contact/anisotropic_vdw.h"
 #include "mdem/force/contact/np_cnt_contact.h"
 #include "mdem/force/contact/np_np_contact.h"
+#include "mdem/io/state_io.h"
 
 namespace mdem {
 
@@ -89,6 +90,19 @@ PrerelaxStatus PrerelaxCriterion::measure(const System& sys) const {
 bool PrerelaxCriterion::met(const System& sys) {
   last_ = measure(sys);
   return last_.overlap_free && last_.slow;
+}
+
+void PrerelaxCriterion::save_state(StateWriter& w) const {
+  w.begin("prerelax criterion");
+  for (double d : {last_.min_cnt_cnt, last_.min_np_cnt, last_.min_np_np, last_.max_speed}) w.put(d);
+  for (bool b : {last_.overlap_free, last_.slow, last_.checked}) w.put(b);
+}
+
+void PrerelaxCriterion::load_state(StateReader& r) {
+  r.begin("prerelax criterion");
+  for (double* d : {&last_.min_cnt_cnt, &last_.min_np_cnt, &last_.min_np_np, &last_.max_speed})
+    *d = r.get<double>("last check");
+  for (bool* b : {&last_.overlap_free, &last_.slow, &last_.checked}) *b = r.get_bool("last check");
 }
 
 std::string PrerelaxCriterion::reason() const {

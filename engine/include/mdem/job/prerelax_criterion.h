@@ -46,6 +46,10 @@ class PrerelaxCriterion final : public StopCriterion {
   // check_every steps, at most ceil(max_time / dt) steps. Throws std::invalid_argument for a dt
   // that is not finite and > 0.
   static StopCondition stop(std::shared_ptr<PrerelaxCriterion> c, double dt);
+  // The last check's figures are part of a checkpoint: a run resumed after it stops with the
+  // same reason as one never stopped (the stage's end reads them).
+  void save_state(StateWriter& w) const override;
+  void load_state(StateReader& r) override;
 
  private:
   PrerelaxLimits limits_;
