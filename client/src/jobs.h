@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "flags.h"
+#include "local_checkpoint.h"
 #include "mdem/integrate/system.h"
 #include "spec_flags.h"
 
@@ -24,14 +25,21 @@ struct SpecRunOptions {
   std::optional<double> thermo_every_ps;  // default: default_thermo_every
   std::optional<std::string> log;         // default: default_log_path
   bool no_log = false;
+  CheckpointPolicy checkpoint;  // --checkpoint-every, --no-checkpoint
 };
 
 // Runs one finalized spec in this process as `mdem run <kind>` does (results in the database,
 // the thermo table and report, or one JSON object with json); the new job's id goes to *job_id
 // (when given) before anything runs. Returns kOk or kJobFailed; throws what the run's setup
 // throws (a refused time step, an unwritable database or log).
+// With `resume`, the job of its checkpoint continues instead (`mdem run --resume`: its id, the
+// results it stored up to the checkpoint, its log appended to).
 int run_spec_job(const SpecKind& kind, const SpecRunOptions& options, std::ostream& out,
-                 std::ostream& err, std::string* job_id = nullptr);
+                 std::ostream& err, std::string* job_id = nullptr,
+                 const ResumePoint* resume = nullptr);
+
+// `mdem run --resume ID [flags]`: continues an interrupted or stopped local job (run_resume.cpp).
+int run_resume(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
 // Runs one `mdem run <kind>` body and turns what it throws into an exit code and a message
 // prefixed with `command`: a bad flag (UsageError) or an impossible setting (ConfigError,

@@ -869,6 +869,56 @@ void ResultsStore::finish_job(const std::string& id, const std::string& state,
   });
 }
 
+namespace {
+
+// Deletes the rows of `table` (frames or snapshots) of job `id` past the first `keep` by seq.
+void keep_first(Impl& db, const char* table, const std::string& id, std::size_t keep) {
+  const std::size_t have = count_rows(db, table, id);
+  if (have < keep)
+    throw StoreError(db.where() + ": job '" + id + "' has " + std::to_string(have) + " " + table +
+                     ", fewer than the " + std::to_string(keep) +
+                     " its checkpoint was taken with (rows were deleted?)");
+  if (have == keep) return;
+  Query at(
+      db,
+      std::string("SELECT seq FROM ") + table + " WHERE job_id = ? ORDER BY seq LIMIT 1 OFFSET ?",
+      "cannot read");
+  at.bind(1, id).bind(2, static_cast<long>(keep));
+  at.step();
+  const long first_dropped = at.integer(0);
+  if (std::string(table) == "frames")
+    Query(db, "DELETE FROM frame_values WHERE job_id = ? AND seq >= ?", "cannot delete frames")
+        .bind(1, id)
+        .bind(2, first_dropped)
+        .run();
+  Query(db, std::string("DELETE FROM ") + table + " WHERE job_id = ? AND seq >= ?",
+        std::string("cannot delete ") + table)
+      .bind(1, id)
+      .bind(2, first_dropped)
+      .run();
+}
+
+}  // namespace
+
+void ResultsStore::resume_job(const std::string& id, std::size_t frames, std::size_t snapshots) {
+  impl_->write_job(id, [&](StoreDb& db) {
+    keep_first(db, "frames", id, frames);
+    keep_first(db, "snapshots", id, snapshots);
+    const bool own = !db.missing.count("runner");
+    Query q(db,
+            std::string("UPDATE jobs SET state = ?, reason = '', summary_json = '', finished_at = "
+                        "''") +
+                (own ? ", runner = ?" : "") + " WHERE id = ?",
+            "cannot resume job '" + id + "'");
+    q.bind(1, job_state_name(v1::RUNNING));
+    if (own)
+      q.bind(2, this_process()).bind(3, id);
+    else
+      q.bind(2, id);
+    q.run();
+  });
+}
+
 void ResultsStore::set_state(const std::string& id, const std::string& state,
                              const std::string& reason) {
   check_state(*impl_, id, state);

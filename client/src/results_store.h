@@ -72,6 +72,12 @@ class ResultsStore {
   void create_job(const JobRecord& job);
   void finish_job(const std::string& id, const std::string& state, const std::string& reason,
                   const std::string& summary_json);
+  // A job run in-process taken up again by `mdem run --resume` (this process): the frames and
+  // snapshots past the first `frames` and `snapshots` (in the order written) are deleted - what
+  // the run stored after its checkpoint, which the resumed run stores again - and the job is
+  // RUNNING again, run by this process, with no reason, summary or finish time; one transaction.
+  // StoreError for an unknown job or fewer rows than asked to keep.
+  void resume_job(const std::string& id, std::size_t frames, std::size_t snapshots);
   // Sets the state and reason only (not the summary; finished_at only cleared, for a state
   // that has not ended: a daemon's TIMEOUT job queued again by `mdem resume`).
   void set_state(const std::string& id, const std::string& state, const std::string& reason);

@@ -37,6 +37,7 @@ std::string first_clause(const std::string& about) {
 // `mdem run --help`: the job kinds, one line each.
 void print_kinds_help(std::ostream& os) {
   os << "Usage: mdem run KIND [--spec FILE] [flags]\n"
+        "       mdem run --resume ID [flags]   (continue a stopped or killed job)\n"
         "\n"
         "Runs a job in this process and stores its results in the local results database\n"
         "(`mdem submit KIND` queues the same job on an mdemd daemon).\n"
@@ -223,6 +224,8 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
     print_kinds_help(args.empty() ? err : out);
     return args.empty() ? kUsage : kOk;
   }
+  if (args.front() == "--resume" || args.front().rfind("--resume=", 0) == 0)
+    return run_resume(args, out, err);
   const std::string kind = args.front();
   const std::vector<std::string> rest(args.begin() + 1, args.end());
   if (const SpecKind* k = find_spec_kind(kind)) return run_spec_kind(*k, rest, out, err);

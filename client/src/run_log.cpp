@@ -37,7 +37,7 @@ fs::path default_log_path(const std::string& db, const std::string& id) {
 
 namespace {
 
-void open_log(std::ofstream& f, const fs::path& path) {
+void open_log(std::ofstream& f, const fs::path& path, bool append) {
   std::error_code ec;
   if (path.has_parent_path()) fs::create_directories(path.parent_path(), ec);
   if (ec)
@@ -46,7 +46,7 @@ void open_log(std::ofstream& f, const fs::path& path) {
   if (fs::is_directory(path, ec))
     throw UsageError("--log " + path.string() + ": is a directory; give a file path, or --no-log");
   errno = 0;
-  f.open(path, std::ios::out | std::ios::trunc);
+  f.open(path, std::ios::out | (append ? std::ios::app : std::ios::trunc));
   if (!f)
     throw UsageError("--log " + path.string() + ": cannot be written (" +
                      (errno ? std::strerror(errno) : "open failed") +
@@ -65,10 +65,10 @@ RunLog::RunLog(std::ostream& out, std::ostream& err)
   err_.tie(&out_);
 }
 
-void RunLog::open(const fs::path& path) {
+void RunLog::open(const fs::path& path, bool append) {
   out_.flush();
   err_.flush();
-  open_log(file_, path);
+  open_log(file_, path, append);
   path_ = path;
   file_ << held_.str();
   held_.str("");

@@ -42,7 +42,8 @@ class RunLog {
   ~RunLog();
   RunLog(const RunLog&) = delete;
   RunLog& operator=(const RunLog&) = delete;
-  void open(const std::filesystem::path& path);
+  // append: after what the file holds (a resumed job's log), else in its place.
+  void open(const std::filesystem::path& path, bool append = false);
   std::ostream& out() { return out_; }
   std::ostream& err() { return err_; }
   const std::filesystem::path& path() const { return path_; }

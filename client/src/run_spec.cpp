@@ -8,6 +8,7 @@
 #include "console.h"
 #include "flags.h"
 #include "jobs.h"
+#include "local_checkpoint.h"
 #include "loop_timing.h"
 #include "mdem/cli.h"
 #include "mdem/job_runner.h"
@@ -41,6 +42,11 @@ void print_help(const SpecKind& kind, std::ostream& os) {
         "  --log PATH           copy of what the terminal shows (default: <db dir>/logs/<job\n"
         "                       id>.log)\n"
         "  --no-log             write no log file\n"
+        "  --checkpoint-every S checkpoint every S seconds of wall time (default 300), and at\n"
+        "                       the end of a stage another follows and when stopped, into\n"
+        "                       <db dir>/checkpoints/<job id>.ckpt; `mdem run --resume ID`\n"
+        "                       continues the job from there\n"
+        "  --no-checkpoint      write no checkpoint (the job cannot be resumed)\n"
         "\n"
         "Exit codes: 0 success, 1 the job failed (e.g. numerical instability) or was cancelled\n"
         "(Ctrl-C, SIGTERM or SIGHUP keep what was computed), 2 usage error (bad flag or spec\n"
@@ -56,12 +62,14 @@ Parsed parse_args(const SpecKind& kind, const std::vector<std::string>& args) {
   fs.with_value.push_back("--log");
   fs.switches.push_back("--json");
   fs.switches.push_back("--no-log");
+  add_checkpoint_flags(fs);
   const auto given = parse_flags(args, fs);
   Parsed p;
   p.spec = spec_from_flags(kind, given);
   p.db = given.count("--db") ? given.at("--db") : ResultsStore::default_path();
   p.json = given.count("--json") > 0;
   p.no_log = given.count("--no-log") > 0;
+  p.checkpoint = parse_checkpoint_flags(given);
   if (given.count("--log")) {
     if (p.no_log) throw UsageError("--log and --no-log: give one of them");
     p.log = given.at("--log");
@@ -123,37 +131,54 @@ class ThermoPrinter {
 }  // namespace
 
 int run_spec_job(const SpecKind& kind, const SpecRunOptions& p, std::ostream& term_out,
-                 std::ostream& term_err, std::string* job_id) {
-  const std::string id = ResultsStore::new_job_id();
+                 std::ostream& term_err, std::string* job_id, const ResumePoint* resume) {
+  const LocalCheckpointRecord* resumed = resume ? &resume->checkpoint.record : nullptr;
+  const std::string id = resumed ? resumed->job_id : ResultsStore::new_job_id();
   if (job_id) *job_id = id;
   // A log path given opens first: one that cannot be written stops the run before anything
   // exists. The default one (beside the database) opens once the database did, so that the
   // database's own errors come first; what was shown before is held for it.
+  // A resumed job's log goes on where it stopped.
   RunLog log(term_out, term_err);
-  if (p.log) log.open(*p.log);
+  if (p.log) log.open(*p.log, resumed != nullptr);
   std::ostream& out = log.out();
   std::ostream& err = log.err();
-  bool recorded = false;
+  bool recorded = resumed != nullptr;  // a resumed job's log is never discarded
   try {
     if (!p.json)
       if (const std::string line = kind.building(p.spec); !line.empty())
         err << kind.name << ": " << line << "\n";
-    JobRunner runner(p.spec);
+    JobRunner runner(p.spec, resumed ? resumed->threads : 0);
     Job& job = runner.job();
-    // A time step above the safe limit is refused here, before anything is stored.
-    check_time_step(job);
+    // A time step above the safe limit is refused here, before anything is stored; a resumed job
+    // is refused here when its checkpoint does not load.
+    if (resume)
+      load_local_checkpoint(resume->path, resume->checkpoint, job);
+    else
+      check_time_step(job);
     // From before the record exists: SIGINT, SIGTERM or SIGHUP stop the job as cancelled.
     InterruptGuard interrupt;
     ResultsStore store(p.db);
-    if (!p.log && !p.no_log) log.open(default_log_path(p.db, id));
+    if (!p.log && !p.no_log) log.open(default_log_path(p.db, id), resumed != nullptr);
     JobRecord rec;
     rec.id = id;
     rec.kind = kind.name;
     rec.spec_json = spec::to_json(p.spec, false);
     rec.state = job_state_name(v1::RUNNING);
-    store.create_job(rec);
-    recorded = true;
-    store.set_columns(rec.id, job.columns());
+    RunCheckpoints checkpoints(
+        p.checkpoint, local_checkpoint_path(store.path(), id),
+        {id, kind.name, rec.spec_json, job.system().threads(), 0, 0, 0, -1, -1, 0,
+         log.enabled() ? std::filesystem::absolute(log.path()).string() : std::string()},
+        resumed);
+    if (resumed) {
+      store.resume_job(id, static_cast<std::size_t>(resumed->frames),
+                       static_cast<std::size_t>(resumed->snapshots));
+      err << resumed_line(kind.name, id, *resumed, job) << "\n";
+    } else {
+      store.create_job(rec);
+      recorded = true;
+      store.set_columns(rec.id, job.columns());
+    }
     if (!p.json) err << kind.name << " " << rec.id << ": " << kind.describe(job, p.spec) << "\n";
 
     std::vector<SeriesFrame> pending;
@@ -164,7 +189,12 @@ int run_spec_job(const SpecKind& kind, const SpecRunOptions& p, std::ostream& te
     LoopTiming timing;
     using Event = LoopTiming::Event;
     JobObserver obs;
+    auto flush = [&] {
+      if (!pending.empty()) store.append_frames(rec.id, pending);
+      pending.clear();
+    };
     obs.frame = [&](const SeriesFrame& f) {
+      if (!checkpoints.take_frame(static_cast<int>(job.stage_index()), f.step)) return;
       timing.enter(Event::Frame);
       pending.push_back(f);
       if (pending.size() >= 64) {
@@ -176,6 +206,7 @@ int run_spec_job(const SpecKind& kind, const SpecRunOptions& p, std::ostream& te
       timing.leave(LoopTiming::kTerminal);
     };
     obs.snapshot = [&](const Snapshot& s) {
+      if (!checkpoints.take_snapshot(static_cast<int>(job.stage_index()), s.step)) return;
       timing.enter(Event::Snapshot);
       store.append_snapshot(rec.id, s);
       timing.leave(LoopTiming::kStore);
@@ -205,18 +236,40 @@ int run_spec_job(const SpecKind& kind, const SpecRunOptions& p, std::ostream& te
       timing.leave(LoopTiming::kOther);
       return stop;
     };
+    // A checkpoint that cannot be written (a full disk): the job goes on, a resume starts from
+    // the last good one.
+    auto checkpoint = [&] {
+      flush();
+      try {
+        checkpoints.write(job);
+        return true;
+      } catch (const CheckpointFileError& e) {
+        progress.clear();
+        err << kind.name << " " << id << ": warning: " << e.what()
+            << "; the job goes on, a resume starts from the last good checkpoint\n";
+        return false;
+      }
+    };
+    obs.checkpoint = [&](long) {
+      if (checkpoints.due(job)) checkpoint();
+    };
 
     timing.begin();
-    const JobOutcome outcome = runner.run(obs, [](Job& j) {
+    JobOutcome outcome = runner.run(obs, [](Job& j) {
       return std::string("interrupted (") + InterruptGuard::signal_name() +
              "); results up to t = " + std::to_string(j.system().time()) + " ps are kept";
     });
     progress.finish();
-    if (!pending.empty()) store.append_frames(rec.id, pending);
+    flush();
     timing.end();
+    // Stopped: a checkpoint to resume from; ended otherwise: none is needed any more.
+    if (outcome.cancelled && checkpoints.enabled() && checkpoint())
+      outcome.reason += "; resume with: " + resume_command(id, p.db);
+    else if (!outcome.cancelled)
+      checkpoints.remove();
     if (!p.json) thermo.finish(out);
 
-    json doc = runner.report(rec.id, outcome);
+    json doc = runner.report(rec.id, outcome, resumed ? resumed->wall_s : 0);
     doc["db"] = store.path();
     const System& sys = job.system();
     LoopFigures figures;
