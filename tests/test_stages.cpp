@@ -364,6 +364,13 @@ TEST(Stages, StopConditionsAreCheckedAtConstruction) {
   expect_refused(StopCondition::after(-1.0), "duration");
   expect_refused(StopCondition::after(std::nan("")), "duration");
   expect_refused(StopCondition::when(std::make_shared<ForceBalance>(1.0), 0, 10), "check_every");
+  // A criterion may end a duration early, not a step count; it needs a check interval.
+  expect_refused(StopCondition{0, 5, std::make_shared<ForceBalance>(1.0), 10, 10}, "exactly one");
+  expect_refused(StopCondition::after_unless(1.0, std::make_shared<ForceBalance>(1.0), 0),
+                 "check_every");
+  SystemStage::Settings ok;
+  ok.stop = StopCondition::after_unless(1.0, std::make_shared<ForceBalance>(1.0), 10);
+  EXPECT_NO_THROW(SystemStage("early", job, std::move(ok)));
   EXPECT_THROW(ForceBalance(0.0), std::invalid_argument);
 }
 

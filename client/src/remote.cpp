@@ -440,10 +440,11 @@ v1::JobInfo JobClient::get(const std::string& job_id) {
   return info;
 }
 
-v1::ListJobsResponse JobClient::list(bool all_users, int limit) {
+v1::ListJobsResponse JobClient::list(bool all_users, int limit, const std::string& study_id) {
   v1::ListJobsRequest request;
   request.set_all_users(all_users);
   request.set_limit(limit);
+  request.set_study_id(study_id);
   v1::ListJobsResponse response;
   const auto ctx = call_context();
   if (const grpc::Status s = stub_->ListJobs(ctx.get(), request, &response); !s.ok()) fail(s);

@@ -210,10 +210,10 @@ double reconnect_timeout(const std::map<std::string, std::string>& given) {
   return parse_in_range("--reconnect-timeout", it->second, 0, 86400, "s");
 }
 
-// The local record of a daemon's job, from what the daemon says of it. The state starts at
-// QUEUED unless given: the events bring it up to date as they are stored.
+}  // namespace
+
 JobRecord record_of(const v1::JobInfo& info, const ConnectionSettings& settings,
-                    const std::string& state = job_state_name(v1::QUEUED)) {
+                    const std::string& state) {
   JobRecord r;
   r.id = info.job_id();
   r.kind = info.kind().empty() ? std::string(job_kind_name(info.spec())) : info.kind();
@@ -224,6 +224,8 @@ JobRecord record_of(const v1::JobInfo& info, const ConnectionSettings& settings,
   r.token_file = settings.token_file;  // watch and cancel use it again; the token is not stored
   return r;
 }
+
+namespace {
 
 json info_json(const v1::JobInfo& info) {
   return json{

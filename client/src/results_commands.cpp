@@ -244,9 +244,16 @@ int run_ls(const std::vector<std::string>& args, std::ostream& out, std::ostream
   FlagSpec spec{{"--db", "--limit", "--study"}, {"--json", "--all", "--local"}};
   add_connection_flags(spec);
   auto given = parse_flags(args, spec);
-  // A study lives in the local database (its jobs may run on a daemon: `mdem watch --study`).
-  if (given.count("--study"))
+  // A study: as the daemon that --server names knows it (it keeps the study id with each job),
+  // else from the local database (its jobs may run on a daemon: `mdem watch --study`).
+  if (given.count("--study")) {
+    if (given.count("--server")) {
+      if (given.count("--db"))
+        throw UsageError("--db: the local database is not read with --server");
+      return ls_daemon_study(given["--study"], given, given.count("--json") > 0, out, err);
+    }
     return ls_study(given["--study"], db_path(given), given.count("--json") > 0, out);
+  }
   if (ask_daemon(given)) return remote_ls(given, out, err);
   const std::string path = db_path(given);
   std::vector<JobRecord> jobs;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 
 #include "jobs.h"
@@ -12,8 +13,10 @@
 #include "mdem/spec.h"
 #include "plot.h"
 #include "remote.h"
+#include "remote_commands.h"
 #include "study_commands.h"
 #include "study_plot.h"
+#include "study_remote.h"
 #include "study_table.h"
 
 namespace mdem::cli {
@@ -49,9 +52,11 @@ void print_help(std::ostream& os) {
         "                       ~/.local/share/mdem/results.db)\n"
         "  --json               print the study's table as one JSON object\n"
         "  --server HOST:PORT   queue the runs on mdemd instead (with --token-file, --tls,\n"
-        "                       --ca-file as for `mdem submit`), recorded here as one study:\n"
-        "                       `mdem watch --study ID` follows its jobs into the database and\n"
-        "                       then prints the table; `mdem cancel --study ID` cancels them\n"
+        "                       --ca-file as for `mdem submit`), each job tagged with the study\n"
+        "                       id and its values: `mdem watch --study ID` follows its jobs into\n"
+        "                       the database and then prints the table; `mdem cancel --study ID`\n"
+        "                       cancels them; `mdem ls --study ID --server ...` lists them. Any\n"
+        "                       client of the same user can, with a fresh database too\n"
         "\n"
         "`mdem plot ID` draws a study's errors against wall time (log-log); `mdem ls --study ID`\n"
         "lists its jobs.\n"
@@ -93,11 +98,19 @@ struct StudyPlan {
   std::string db;
   bool json = false;
   ReferenceMode mode = ReferenceMode::Auto;
-  // --server: the connection flags given, handed to `mdem submit` for each run.
-  std::vector<std::string> connection;
+  // --server: the connection flags given (empty: the runs are made here).
+  FlagValues connection;
 };
 
-// The connection flags given (--server, --token-file, --ca-file, --tls) as arguments again.
+// The connection flags given (--server, --token-file, --ca-file, --tls).
+FlagValues connection_flags(const FlagValues& given) {
+  FlagValues out;
+  for (const char* f : {"--server", "--token-file", "--ca-file", "--tls"})
+    if (given.count(f)) out[f] = given.at(f);
+  return out;
+}
+
+// The connection flags given as arguments again.
 std::vector<std::string> connection_args(const FlagValues& given) {
   std::vector<std::string> out;
   for (const char* f : {"--server", "--token-file", "--ca-file"})
@@ -119,7 +132,7 @@ StudyPlan parse_plan(const SpecKind& kind, std::vector<std::string> args) {
   if (!given.count("--server"))
     for (const char* f : {"--token-file", "--ca-file", "--tls"})
       if (given.count(f)) throw UsageError(std::string(f) + ": only with --server HOST:PORT");
-  plan.connection = connection_args(given);
+  if (given.count("--server")) plan.connection = connection_flags(given);
   plan.mode = reference_mode(given);
   plan.base = spec_from_flags(kind, given);
   for (const std::string& v : vary) plan.fields.push_back(parse_vary(kind, v));
@@ -206,42 +219,37 @@ StudyTable open_study(const std::string& id, const std::string& db, ReferenceMod
   return t;
 }
 
-// Each run queued on the daemon through `mdem submit` (its spec as a file), recorded here as a
-// job of the study; `mdem watch --study` follows them and computes the errors.
+// Each run queued on the daemon with its study tag (study id, run, varied values), recorded
+// here as a job of the study; `mdem watch --study` follows them and computes the errors. The
+// request id of a run is the study's id and the run's index: a retry queues nothing twice.
 int run_remote(const StudyPlan& plan, std::ostream& out, std::ostream& err) {
   ResultsStore jobs(plan.db);
   StudyStore studies(plan.db);
-  const StudyRecord study = record_study(studies, plan, plan.connection.at(1));
-  const std::filesystem::path spec_file =
-      std::filesystem::temp_directory_path() / (study.id + "-spec.json");
+  JobClient client(resolve_connection(plan.connection, process_env()));
+  const StudyRecord study = record_study(studies, plan, client.settings().server);
   int queued = 0;
   for (std::size_t i = 0; i < plan.points.size(); ++i) {
-    {
-      std::ofstream os(spec_file);
-      os << spec::to_json(varied_spec(plan.base, plan.fields, plan.points[i]), false);
-      if (!os.flush()) throw StoreError("cannot write " + spec_file.string());
-    }
-    std::vector<std::string> args = {plan.kind->name, "--spec", spec_file.string(),
-                                     "--json",        "--db",   plan.db};
-    args.insert(args.end(), plan.connection.begin(), plan.connection.end());
-    std::ostringstream reply, submit_err;
-    const int code = submit(args, reply, submit_err);
-    if (code != kOk) {
-      std::filesystem::remove(spec_file);
-      err << submit_err.str();
-      err << "study " << study.id << ": " << queued << " of " << plan.points.size()
+    v1::SubmitJobRequest request;
+    request.set_request_id(study.id + "-run-" + std::to_string(i));
+    *request.mutable_spec() = varied_spec(plan.base, plan.fields, plan.points[i]);
+    *request.mutable_study() =
+        study_run_tag(study.id, static_cast<int>(i), plan.fields, plan.points[i]);
+    v1::SubmitJobResponse response;
+    try {
+      response = client.submit(request);
+    } catch (const RemoteError& e) {
+      err << "mdem study " << plan.kind->name << ": " << e.what() << "\n"
+          << "study " << study.id << ": " << queued << " of " << plan.points.size()
           << " runs queued before the daemon refused one\n";
-      return code;
+      return e.exit_code;
     }
-    const json r = json::parse(reply.str());
-    studies.add_run(study.id, {static_cast<int>(i), r.at("job_id").get<std::string>(),
-                               json(plan.points[i]).dump()});
+    const v1::JobInfo& info = response.job();
+    jobs.upsert_remote_job(record_of(info, client.settings(), job_state_name(info.state())));
+    studies.add_run(study.id, {static_cast<int>(i), info.job_id(), json(plan.points[i]).dump()});
     ++queued;
     err << "  run " << i + 1 << "/" << plan.points.size() << " ("
-        << point_text(plan.fields, plan.points[i]) << "): queued "
-        << r.at("job_id").get<std::string>() << "\n";
+        << point_text(plan.fields, plan.points[i]) << "): queued " << info.job_id() << "\n";
   }
-  std::filesystem::remove(spec_file);
   if (plan.json) {
     write_json(out, json{{"study_id", study.id}, {"server", study.server}, {"runs", queued}});
     out << "\n";
@@ -267,6 +275,7 @@ struct StudyCall {
   std::string id, db;
   bool json = false;
   std::vector<std::string> pass;
+  FlagValues connection;  // the connection flags given
 };
 
 StudyCall study_call(const std::vector<std::string>& args, bool watching) {
@@ -278,11 +287,64 @@ StudyCall study_call(const std::vector<std::string>& args, bool watching) {
   c.id = given.at("--study");
   c.db = given.count("--db") ? given.at("--db") : ResultsStore::default_path();
   c.json = given.count("--json") > 0;
+  c.connection = connection_flags(given);
   c.pass = connection_args(given);
   c.pass.insert(c.pass.end(), {"--db", c.db});
   if (given.count("--reconnect-timeout"))
     c.pass.insert(c.pass.end(), {"--reconnect-timeout", given.at("--reconnect-timeout")});
   return c;
+}
+
+// Whether the study is in the local database (a prefix of its id will do).
+bool study_here(const StudyCall& c) {
+  std::error_code ec;
+  if (!std::filesystem::exists(c.db, ec)) return false;
+  ResultsStore jobs(c.db);
+  return StudyStore(c.db).find(c.id).has_value();
+}
+
+// A study not in the local database but on the daemon that --server (or $MDEM_SERVER) names:
+// recorded here from the daemon's jobs (another client submitted it), so that it can be
+// followed and its table computed as if it had been submitted from here.
+void take_study_from_daemon(const StudyCall& c) {
+  if (study_here(c) || !server_named(c.connection, process_env())) return;
+  JobClient client(resolve_connection(c.connection, process_env()));
+  ResultsStore jobs(c.db);
+  StudyStore studies(c.db);
+  take_daemon_study(client, jobs, studies, c.id);
+}
+
+// The study's jobs: from the local database, else from the daemon named (the study id in full).
+std::vector<std::string> study_job_ids(const StudyCall& c) {
+  std::vector<std::string> ids;
+  if (study_here(c) || !server_named(c.connection, process_env())) {
+    for (const StudyRunRecord& r : open_study(c.id, c.db, ReferenceMode::Auto).records)
+      ids.push_back(r.job_id);
+    return ids;
+  }
+  JobClient client(resolve_connection(c.connection, process_env()));
+  for (const v1::JobInfo& j : daemon_study_jobs(client, c.id)) ids.push_back(j.job_id());
+  if (ids.empty())
+    throw StoreError("no study '" + c.id + "' in " + c.db + " nor among your jobs on mdemd at " +
+                     client.settings().server);
+  return ids;
+}
+
+// guarded_run, and a daemon's refusal or a lost connection as `mdem submit` reports it: its
+// message and exit code (2 for a refused argument, 3 for no connection).
+int guarded_remote(const std::string& command, const std::function<int()>& body,
+                   std::ostream& err) {
+  return guarded_run(
+      command,
+      [&] {
+        try {
+          return body();
+        } catch (const RemoteError& e) {
+          err << command << ": " << e.what() << "\n";
+          return e.exit_code;
+        }
+      },
+      err);
 }
 
 }  // namespace
@@ -305,10 +367,11 @@ bool names_study(const std::vector<std::string>& args) {
 }
 
 int watch_study(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  return guarded_run(
+  return guarded_remote(
       "mdem watch",
       [&] {
         const StudyCall c = study_call(args, true);
+        take_study_from_daemon(c);
         const StudyTable before = open_study(c.id, c.db, ReferenceMode::Auto);
         for (const StudyRunRecord& r : before.records) {
           std::vector<std::string> a = {r.job_id};
@@ -325,18 +388,28 @@ int watch_study(const std::vector<std::string>& args, std::ostream& out, std::os
 }
 
 int cancel_study(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  return guarded_run(
+  return guarded_remote(
       "mdem cancel",
       [&] {
         const StudyCall c = study_call(args, false);
-        const StudyTable t = open_study(c.id, c.db, ReferenceMode::Auto);
         int worst = kOk;
-        for (const StudyRunRecord& r : t.records) {
-          std::vector<std::string> a = {r.job_id};
+        for (const std::string& job_id : study_job_ids(c)) {
+          std::vector<std::string> a = {job_id};
           a.insert(a.end(), c.pass.begin(), c.pass.end());
           if (const int code = cancel(a, out, err); code != kOk) worst = code;
         }
         return worst;
+      },
+      err);
+}
+
+int ls_daemon_study(const std::string& id, const FlagValues& given, bool as_json, std::ostream& out,
+                    std::ostream& err) {
+  return guarded_remote(
+      "mdem ls",
+      [&] {
+        JobClient client(resolve_connection(connection_flags(given), process_env()));
+        return print_daemon_study(client, id, as_json, out, err);
       },
       err);
 }
@@ -396,7 +469,13 @@ int study(const std::vector<std::string>& args, std::ostream& out, std::ostream&
   return guarded_run(
       command,
       [&] {
-        return plan.connection.empty() ? run_local(plan, out, err) : run_remote(plan, out, err);
+        if (plan.connection.empty()) return run_local(plan, out, err);
+        try {
+          return run_remote(plan, out, err);
+        } catch (const RemoteError& e) {  // no connection before the first run was queued
+          err << command << ": " << e.what() << "\n";
+          return e.exit_code;
+        }
       },
       err);
 }

@@ -248,4 +248,9 @@ std::string point_text(const std::vector<VariedField>& fields, const std::vector
   return s;
 }
 
+bool integer_field(const std::string& path) {
+  const FieldDescriptor* f = field_at(path);
+  return f && numeric(f) && is_integer(f);
+}
+
 }  // namespace mdem::cli

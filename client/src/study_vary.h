@@ -48,6 +48,9 @@ void check_study(const v1::JobSpec& base, const std::vector<VariedField>& fields
 
 // "safety=0.3" / "safety=0.3, rate=2": a point in words, the fields by their short names.
 std::string point_text(const std::vector<VariedField>& fields, const std::vector<double>& point);
+// Whether the spec field at the dotted path holds whole numbers (layers, seed); false for a
+// real or a path that is no field.
+bool integer_field(const std::string& path);
 // "safety": the last component of a dotted path.
 std::string short_name(const std::string& path);
 

@@ -11,6 +11,7 @@
 #include "mdem/time_text.h"
 #include "queue_place.h"
 #include "request_check.h"
+#include "study_check.h"
 
 namespace mdem::server {
 namespace {
@@ -122,6 +123,8 @@ Status JobServiceImpl::SubmitJob(grpc::ServerContext* ctx, const v1::SubmitJobRe
                     "the request has fields mdemd cannot read (unknown, or sent with another "
                     "wire type than declared); nothing was queued:\n" +
                         bad);
+    if (const std::string bad = study_run_problem(req->study()); !bad.empty())
+      return Status(StatusCode::INVALID_ARGUMENT, bad + "; nothing was queued");
     double limit = 0;
     if (Status s = time_limit(req->time_limit_s(), "time_limit_s", limit); !s.ok()) return s;
     v1::JobSpec spec;
@@ -162,8 +165,9 @@ Status JobServiceImpl::SubmitJob(grpc::ServerContext* ctx, const v1::SubmitJobRe
       return unavailable(why, "nothing was queued");
     SubmitResult r;
     try {
-      r = store_.submit(who.user, req->request_id(), spec, std::string(job_kind_name(spec)),
-                        elements, total_steps, threads, config_.max_queued_per_user, limit);
+      r = store_.submit(who.user, req->request_id(), spec, req->study(),
+                        std::string(job_kind_name(spec)), elements, total_steps, threads,
+                        config_.max_queued_per_user, limit);
     } catch (const LimitError& e) {
       return Status(StatusCode::RESOURCE_EXHAUSTED, e.what());
     } catch (const SqliteError& e) {  // e.g. the disk is full
@@ -206,9 +210,12 @@ Status JobServiceImpl::ListJobs(grpc::ServerContext* ctx, const v1::ListJobsRequ
     if (req->limit() < 0 || req->limit() > 1000)
       return Status(StatusCode::INVALID_ARGUMENT,
                     "limit: " + std::to_string(req->limit()) + " is not in [0, 1000] (0 = 100)");
+    if (!req->study_id().empty())
+      if (const std::string bad = study_id_problem(req->study_id(), "study_id"); !bad.empty())
+        return Status(StatusCode::INVALID_ARGUMENT, bad);
     const int limit = req->limit() == 0 ? 100 : req->limit();
     const std::vector<JobOwner> queue = store_.queue(), running = store_.running();
-    for (const JobRow& r : store_.list(req->all_users() ? "" : who.user, limit)) {
+    for (const JobRow& r : store_.list(req->all_users() ? "" : who.user, limit, req->study_id())) {
       *resp->add_jobs() = job_info(r, queue, running, who);
     }
     return Status::OK;

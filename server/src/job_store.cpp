@@ -41,12 +41,15 @@ CREATE TABLE jobs (
   last_progress_step INTEGER NOT NULL DEFAULT -1,
   columns_logged INTEGER NOT NULL DEFAULT 0,
   report_json TEXT NOT NULL DEFAULT '',
+  study_id TEXT NOT NULL DEFAULT '',
+  study BLOB NOT NULL DEFAULT x'',
   time_limit_s REAL NOT NULL DEFAULT 0,
   peak_bytes INTEGER NOT NULL DEFAULT 0,
   daemon_rss_peak_bytes INTEGER NOT NULL DEFAULT 0,
   UNIQUE (user, request_id)
 );
 CREATE INDEX jobs_state ON jobs (state, user);
+CREATE INDEX jobs_study ON jobs (user, study_id);
 CREATE TABLE events (
   job_id TEXT NOT NULL REFERENCES jobs (id),
   seq INTEGER NOT NULL,
@@ -58,7 +61,7 @@ CREATE TABLE events (
 constexpr const char* kJobColumns =
     "id, user, request_id, kind, name, spec, state, reason, created_at, started_at, finished_at, "
     "elements, total_steps, step, last_seq, threads, resumes, checkpoint_step, wall_s, "
-    "last_frame_step, last_snapshot_step, last_progress_step, columns_logged, report_json, "
+    "last_frame_step, last_snapshot_step, last_progress_step, columns_logged, report_json, study, "
     "time_limit_s, peak_bytes, daemon_rss_peak_bytes";
 
 // A job database of an mdemd before wall-time limits and memory peaks gains them: its jobs had
@@ -67,6 +70,13 @@ constexpr const char* kUsageColumns = R"sql(
 ALTER TABLE jobs ADD COLUMN time_limit_s REAL NOT NULL DEFAULT 0;
 ALTER TABLE jobs ADD COLUMN peak_bytes INTEGER NOT NULL DEFAULT 0;
 ALTER TABLE jobs ADD COLUMN daemon_rss_peak_bytes INTEGER NOT NULL DEFAULT 0;
+)sql";
+
+// A job database of an mdemd before studies (no study columns) gains them: its jobs are lone jobs.
+constexpr const char* kStudyColumns = R"sql(
+ALTER TABLE jobs ADD COLUMN study_id TEXT NOT NULL DEFAULT '';
+ALTER TABLE jobs ADD COLUMN study BLOB NOT NULL DEFAULT x'';
+CREATE INDEX jobs_study ON jobs (user, study_id);
 )sql";
 
 JobRow read_row(const Query& q) {
@@ -95,9 +105,10 @@ JobRow read_row(const Query& q) {
   r.last_progress_step = q.integer(21);
   r.columns_logged = q.integer(22) != 0;
   r.report_json = q.text(23);
-  r.time_limit_s = q.real(24);
-  r.peak_bytes = q.integer(25);
-  r.daemon_rss_peak_bytes = q.integer(26);
+  r.study.ParseFromString(q.blob(24));
+  r.time_limit_s = q.real(25);
+  r.peak_bytes = q.integer(26);
+  r.daemon_rss_peak_bytes = q.integer(27);
   return r;
 }
 
@@ -133,6 +144,7 @@ v1::JobInfo JobRow::info() const {
   i.set_elapsed_s(wall_s);
   i.set_job_data_peak_bytes(peak_bytes);
   i.set_daemon_rss_peak_bytes(daemon_rss_peak_bytes);
+  if (!study.study_id().empty()) *i.mutable_study() = study;
   return i;
 }
 
@@ -157,6 +169,11 @@ JobStore::JobStore(const std::string& path) : db_(path, "job database", "FULL") 
     if (v != kSchemaVersion)
       throw SqliteError(db_.where() + ": schema version " + std::to_string(v) +
                         ", but this mdemd reads version " + std::to_string(kSchemaVersion));
+    if (!db_.has_column("jobs", "study_id")) {
+      Transaction t(db_);
+      db_.exec(kStudyColumns, "cannot add the study columns");
+      t.commit();
+    }
     if (!db_.has_column("jobs", "time_limit_s")) {
       Transaction t(db_);
       db_.exec(kUsageColumns, "cannot add the time-limit and memory columns");
@@ -186,9 +203,9 @@ std::optional<JobRow> JobStore::get(const std::string& id) {
 }
 
 SubmitResult JobStore::submit(const std::string& user, const std::string& request_id,
-                              const v1::JobSpec& spec, const std::string& kind, long elements,
-                              long total_steps, int threads, long max_active,
-                              double time_limit_s) {
+                              const v1::JobSpec& spec, const v1::StudyRun& study,
+                              const std::string& kind, long elements, long total_steps, int threads,
+                              long max_active, double time_limit_s) {
   std::lock_guard lock(db_.mutex());
   Transaction t(db_);
   {
@@ -211,10 +228,12 @@ SubmitResult JobStore::submit(const std::string& user, const std::string& reques
   }
   std::string spec_bytes;
   spec.SerializeToString(&spec_bytes);
+  std::string study_bytes;
+  if (!study.study_id().empty()) study.SerializeToString(&study_bytes);
   const std::string id = new_job_id(6);  // a shared queue: many submits a second
   Query(db_,
         "INSERT INTO jobs (id, user, request_id, kind, name, spec, state, created_at, elements, "
-        "total_steps, threads) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+        "total_steps, threads, study_id, study) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
         "cannot queue the job")
       .bind(1, id)
       .bind(2, user)
@@ -227,6 +246,8 @@ SubmitResult JobStore::submit(const std::string& user, const std::string& reques
       .bind(9, elements)
       .bind(10, total_steps)
       .bind(11, static_cast<long>(threads))
+      .bind(12, study.study_id())
+      .bind_blob(13, study_bytes)
       .run();
   Query(db_, "UPDATE jobs SET time_limit_s = ? WHERE id = ?", "cannot queue the job")
       .bind(1, time_limit_s)
@@ -238,14 +259,16 @@ SubmitResult JobStore::submit(const std::string& user, const std::string& reques
   return {*get_locked(id), true};
 }
 
-std::vector<JobRow> JobStore::list(const std::string& user, int limit) {
+std::vector<JobRow> JobStore::list(const std::string& user, int limit,
+                                   const std::string& study_id) {
   std::lock_guard lock(db_.mutex());
   std::vector<JobRow> out;
   Query q(db_,
           std::string("SELECT ") + kJobColumns +
-              " FROM jobs WHERE (? = '' OR user = ?) ORDER BY created_at DESC, id DESC LIMIT ?",
+              " FROM jobs WHERE (?1 = '' OR user = ?1) AND (?2 = '' OR study_id = ?2) "
+              "ORDER BY created_at DESC, id DESC LIMIT ?3",
           "cannot list jobs");
-  q.bind(1, user).bind(2, user).bind(3, static_cast<long>(limit));
+  q.bind(1, user).bind(2, study_id).bind(3, static_cast<long>(limit));
   while (q.step()) out.push_back(read_row(q));
   return out;
 }

@@ -31,11 +31,12 @@ bool ForceBalance::met(const System& sys) { return largest_net_force(sys) < tole
 SystemStage::SystemStage(std::string name, Job& job, Settings s)
     : Stage(std::move(name)), job_(job), s_(std::move(s)) {
   const StopCondition& c = s_.stop;
-  const int kinds = (c.duration_ps != 0) + (c.steps != 0) + (c.criterion != nullptr);
+  const bool early = c.criterion && c.duration_ps != 0 && c.steps == 0;  // ends a duration early
+  const int kinds = (c.duration_ps != 0) + (c.steps != 0) + (c.criterion != nullptr && !early);
   if (kinds != 1)
     throw std::invalid_argument("stage '" + this->name() +
                                 "': the stop condition must be exactly one of a duration, a step "
-                                "count or a criterion");
+                                "count or a criterion (a criterion may end a duration early)");
   if (c.duration_ps != 0 && !(std::isfinite(c.duration_ps) && c.duration_ps > 0))
     throw std::invalid_argument("stage '" + this->name() +
                                 "': duration must be finite and > 0 ps, got " +
@@ -43,9 +44,9 @@ SystemStage::SystemStage(std::string name, Job& job, Settings s)
   if (c.steps < 0)
     throw std::invalid_argument("stage '" + this->name() + "': steps must be >= 1, got " +
                                 std::to_string(c.steps));
-  if (c.criterion && (c.check_every < 1 || c.max_steps < 1))
+  if (c.criterion && (c.check_every < 1 || (!early && c.max_steps < 1)))
     throw std::invalid_argument("stage '" + this->name() +
-                                "': a criterion needs check_every >= 1 and max_steps >= 1");
+                                "': a criterion needs check_every >= 1 and, alone, max_steps >= 1");
   if (s_.local_damping && !(*s_.local_damping >= 0 && *s_.local_damping < 1))
     throw std::invalid_argument("stage '" + this->name() + "': local damping must be in [0, 1)");
   for (const auto& o : s_.observers)

@@ -78,6 +78,12 @@ struct StiffnessSums {
   }
 };
 
+// How often multiple time stepping (r-RESPA, IntegratorSettings::respa_k) evaluates a model: Fast
+// every inner step (bonds, stiff contacts, walls), Slow once per outer step of respa_k inner steps,
+// applied as impulses at the outer step's start and end (soft pair forces: vdW, the NP contacts,
+// and the dashpots that damp exactly their pairs).
+enum class Timescale { Fast, Slow };
+
 // A model that holds element indices between evaluations remaps them when the system reorders
 // its elements (ElementIndexHolder, core/index_holder.h).
 class ForceModel : public ElementIndexHolder {
@@ -100,6 +106,8 @@ class ForceModel : public ElementIndexHolder {
 
   // True for velocity-dependent (damping) models, which write to the sink's damping buffers.
   virtual bool dissipative() const { return false; }
+  // Fast unless the model says its forces vary slowly enough for the outer step (Timescale).
+  virtual Timescale timescale() const { return Timescale::Fast; }
 
   // Adds forces, torques and energy of the current state to the sink, using the thread-local
   // slot of omp_get_thread_num() inside its own `#pragma omp parallel for schedule(static)`.

@@ -57,7 +57,8 @@ class Stage : public Stateful {
 };
 
 // When a SystemStage ends: after a simulated time or a step count, or when a criterion checked
-// every check_every steps holds, at most after max_steps.
+// every check_every steps holds, at most after max_steps. A criterion beside a duration ends the
+// stage early when it holds (an outcome reached before the planned end, e.g. a rope that separated).
 class StopCriterion : public Stateful {
  public:
   virtual bool met(const System& sys) = 0;
@@ -74,6 +75,9 @@ struct StopCondition {
 
   static StopCondition after(double ps) { return {ps, 0, nullptr, 100, 0}; }
   static StopCondition after_steps(long n) { return {0, n, nullptr, 100, 0}; }
+  static StopCondition after_unless(double ps, std::shared_ptr<StopCriterion> c, long check_every) {
+    return {ps, 0, std::move(c), check_every, 0};
+  }
   static StopCondition when(std::shared_ptr<StopCriterion> c, long check_every, long max_steps) {
     return {0, 0, std::move(c), check_every, max_steps};
   }
