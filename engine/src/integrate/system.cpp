@@ -524,11 +524,14 @@ void System::run(long nsteps) {
         });
     if (runaway >= 0) {
       const std::size_t i = static_cast<std::size_t>(runaway);
+      std::string cause;  // a load that explains the runaway, else the step's own account
+      for (const auto& u : updaters_)
+        if (cause.empty()) cause = u->explain_runaway(*this, i);
       std::ostringstream m;
       m << describe(E, i) << " moved " << (E.v[i] * dt).norm() << " nm and turned "
         << E.w[i].norm() * dt << " rad in one step at step " << steps_ + 1 << " (t = " << time_ + dt
         << " ps): the run is unstable; dt = " << dt_ << " ps against a critical step of "
-        << dt_critical_ << " ps - " << unstable_cause();
+        << dt_critical_ << " ps - " << (cause.empty() ? unstable_cause() : cause);
       throw NumericalError(m.str(), steps_ + 1, runaway);
     }
 

@@ -45,9 +45,55 @@ TwistJob::TwistJob(const TwistJobSpec& spec, IntegratorSettings settings)
   SystemStage::Settings stage;
   stage.protocol = protocol_;
   stage.observers = {shift_};
-  stage.stop = StopCondition::after(protocol_->duration());
+  separation_ = std::make_shared<OverTwistSeparation>(protocol_);
+  stage.stop = StopCondition::after_unless(protocol_->duration(), separation_,
+                                           OverTwistSeparation::kCheckEvery);
   add_stage(std::make_unique<SystemStage>("twist", *this, std::move(stage)));
   add_state(peaks_);
+}
+
+OverTwistSeparation::OverTwistSeparation(std::shared_ptr<const TwistProtocol> protocol)
+    : protocol_(std::move(protocol)) {}
+
+bool OverTwistSeparation::met(const System& sys) {
+  if (time_) return true;
+  const TwistPhase p = protocol_->phase_at(sys.time());
+  const bool loaded =
+      p == TwistPhase::Loading ||
+      (p == TwistPhase::Holding && protocol_->loading().boundary == TwistBoundary::ConstantMoment);
+  const std::optional<SpunUpGrip> g = loaded ? protocol_->spun_up_grip(sys) : std::nullopt;
+  in_a_row_ = g ? in_a_row_ + 1 : 0;
+  if (in_a_row_ < kChecksInARow) return false;
+  time_ = sys.time();
+  grip_ = *g;
+  return true;
+}
+
+void OverTwistSeparation::save_state(StateWriter& w) const {
+  w.begin("over_twist");
+  w.put(in_a_row_);
+  w.put(time_.has_value());
+  w.put(time_.value_or(0.0));
+  w.put(grip_.element);
+  w.put(grip_.tube);
+  w.put(grip_.segment);
+  w.put(grip_.moment);
+  w.put(grip_.spin);
+}
+
+void OverTwistSeparation::load_state(StateReader& r) {
+  r.begin("over_twist");
+  in_a_row_ = r.get<int>("checks in a row");
+  const bool separated = r.get_bool("separated");
+  const double t = r.get<double>("separation time");
+  time_ = separated ? std::optional<double>(t) : std::nullopt;
+  grip_.element = r.get<std::size_t>("element");
+  grip_.tube = r.get<int>("tube");
+  grip_.segment = r.get<int>("segment");
+  grip_.moment = r.get<double>("moment");
+  grip_.spin = r.get<double>("spin");
+  if (in_a_row_ < 0 || in_a_row_ > kChecksInARow || !std::isfinite(t))
+    r.fail("checks in a row", "holds an impossible over-twist state");
 }
 
 void TwistJob::Peaks::save_state(StateWriter& w) const {
@@ -117,24 +163,29 @@ std::vector<double> TwistJob::observe() {
 
 Summary TwistJob::summary() {
   const TwistReport r = report();
-  return {{"morphology", std::string(morphology_name(r.morphology))},
-          {"twist_angle_deg", r.twist_angle_deg},
-          {"shift_angle_deg", r.shift_angle_deg},
-          {"topological_charge", static_cast<long>(r.topological_charge)},
-          {"max_topological_charge", static_cast<long>(peaks_->max_charge)},
-          {"peak_twist_angle_deg", peaks_->twist},
-          {"peak_shift_angle_deg", peaks_->shift},
-          {"rope_radius_nm", r.rope_radius_nm},
-          {"initial_rope_radius_nm", rope_.initial_radius},
-          {"length_nm", r.length_nm},
-          {"core_void_nm", r.core_void_nm},
-          {"axis_deviation_nm", r.axis_deviation_nm},
-          {"applied_torque_nNnm", r.applied_torque_nNnm},
-          {"grip_reaction_nNnm", r.grip_reaction_nNnm},
-          {"tubes", static_cast<long>(rope_.tubes.size())},
-          {"elements", static_cast<long>(sys_.elements().size())},
-          {"spacing_nm", rope_.lattice.spacing},
-          {"simulated_ps", sys_.time()}};
+  const OverTwistSeparation& sep = *separation_;
+  Summary s = {{"outcome", std::string(sep.time() ? "separated_by_over_twist" : "completed")},
+               {"outcome_time_ps", sep.time().value_or(sys_.time())},
+               {"separated_tube", static_cast<long>(sep.time() ? sep.grip().tube : -1)},
+               {"morphology", std::string(morphology_name(r.morphology))},
+               {"twist_angle_deg", r.twist_angle_deg},
+               {"shift_angle_deg", r.shift_angle_deg},
+               {"topological_charge", static_cast<long>(r.topological_charge)},
+               {"max_topological_charge", static_cast<long>(peaks_->max_charge)},
+               {"peak_twist_angle_deg", peaks_->twist},
+               {"peak_shift_angle_deg", peaks_->shift},
+               {"rope_radius_nm", r.rope_radius_nm},
+               {"initial_rope_radius_nm", rope_.initial_radius},
+               {"length_nm", r.length_nm},
+               {"core_void_nm", r.core_void_nm},
+               {"axis_deviation_nm", r.axis_deviation_nm},
+               {"applied_torque_nNnm", r.applied_torque_nNnm},
+               {"grip_reaction_nNnm", r.grip_reaction_nNnm},
+               {"tubes", static_cast<long>(rope_.tubes.size())},
+               {"elements", static_cast<long>(sys_.elements().size())},
+               {"spacing_nm", rope_.lattice.spacing},
+               {"simulated_ps", sys_.time()}};
+  return s;
 }
 
 }  // namespace mdem

@@ -35,6 +35,9 @@ class System;
 class Updater : public Stateful, public ElementIndexHolder {
  public:
   virtual void apply(System& sys, double time) = 0;
+  // Why element i ran away, when this updater's load explains it (e.g. an applied moment that
+  // nothing resists any more); empty when it does not. The run guard says it instead of blaming dt.
+  virtual std::string explain_runaway(const System& /*sys*/, std::size_t /*i*/) const { return {}; }
   void save_state(StateWriter&) const override {}
   void load_state(StateReader&) override {}
 };

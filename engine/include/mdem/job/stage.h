@@ -58,7 +58,8 @@ class Stage : public Stateful {
 
 // When a SystemStage ends: after a simulated time or a step count, or when a criterion checked
 // every check_every steps holds, at most after max_steps. A criterion beside a duration ends the
-// stage early when it holds (an outcome reached before the planned end, e.g. a rope that separated).
+// stage early when it holds (an outcome reached before the planned end, e.g. a rope that
+// separated).
 class StopCriterion : public Stateful {
  public:
   virtual bool met(const System& sys) = 0;

@@ -3,8 +3,10 @@
 // anisotropic vdW contact and its viscous dashpots, loaded in torsion by TwistProtocol. It brings
 // in nothing else: no walls, nanoparticles or granular contacts.
 #include <memory>
+#include <optional>
 
 #include "mdem/job/job.h"
+#include "mdem/job/stage.h"
 #include "mdem/observe/rope_observables.h"
 #include "mdem/protocol/twist_protocol.h"
 #include "mdem/scene/hex_rope.h"
@@ -36,6 +38,30 @@ struct TwistReport {
   Morphology morphology = Morphology::Straight;
 };
 
+// The over-twist outcome (the thesis's "separation due to over twist"): the twist stage ends early,
+// results kept, when a grip element spins in the sense of its moment faster than
+// TwistProtocol::spin_up_limit at three checks in a row (every 10 steps) while the grips are
+// loaded: its tube has unwound or separated, and the held moment would spin it up until the run
+// guard stops the run.
+class OverTwistSeparation final : public StopCriterion {
+ public:
+  static constexpr long kCheckEvery = 10;
+  static constexpr int kChecksInARow = 3;
+  explicit OverTwistSeparation(std::shared_ptr<const TwistProtocol> protocol);
+  bool met(const System& sys) override;
+  // When it separated (ps) and the grip element that spun up; empty while it has not.
+  std::optional<double> time() const { return time_; }
+  const SpunUpGrip& grip() const { return grip_; }
+  void save_state(StateWriter& w) const override;
+  void load_state(StateReader& r) override;
+
+ private:
+  std::shared_ptr<const TwistProtocol> protocol_;
+  int in_a_row_ = 0;
+  std::optional<double> time_;
+  SpunUpGrip grip_;
+};
+
 class TwistJob final : public Job {
  public:
   // Throws std::invalid_argument for an impossible rope or load (see build_hex_rope and
@@ -55,6 +81,7 @@ class TwistJob final : public Job {
   TwistReport report();
   const Rope& rope() const { return rope_; }
   const TwistProtocol& protocol() const { return *protocol_; }
+  const OverTwistSeparation& separation() const { return *separation_; }
 
   // Largest values seen at any report (the summary's figures are those at the end: after
   // unloading, the end shift is the residual twist and these are the loaded ones).
@@ -73,6 +100,7 @@ class TwistJob final : public Job {
   std::shared_ptr<TwistProtocol> protocol_;
   std::shared_ptr<ShiftAngleSampler> shift_;
   std::shared_ptr<Peaks> peaks_;
+  std::shared_ptr<OverTwistSeparation> separation_;
 };
 
 }  // namespace mdem

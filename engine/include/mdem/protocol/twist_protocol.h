@@ -20,6 +20,8 @@
 // Unloading: constant-moment ramps the torque down at the same rate, then relaxes at zero torque;
 // twist-relaxation releases the grips and relaxes.
 #include <cstddef>
+#include <optional>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -42,6 +44,16 @@ enum class GripLoad {
   // grip as a whole by n·T, and the rope turns only as far as the twisted tubes make it.
   PerElement,
 };
+// A loaded grip element turning in the sense of its applied moment: the moment is doing work that
+// nothing stores (its tube has unwound or separated and spins up), the thesis's "separation due to
+// over twist".
+struct SpunUpGrip {
+  std::size_t element = 0;
+  int tube = -1, segment = -1;
+  double moment = 0;  // the load's moment on the element about the axis (eV, > 0)
+  double spin = 0;    // its angular velocity about the axis, in the sense of the moment (rad/ps)
+};
+
 enum class TwistPhase { Loading, Holding, Unloading, Relaxing, Done };
 std::string_view twist_phase_name(TwistPhase p);
 
@@ -71,6 +83,16 @@ class TwistProtocol final : public Protocol {
   // The updater: sets the grips' loads and DOF modes for time t. Grip b (z > 0) gets +T about
   // the axis, grip a gets −T.
   void apply(System& sys, double t) override;
+  // The fastest loaded grip element of tube `tube` (any tube when -1) that spins in the sense of
+  // its moment faster than spin_up_limit(sys); none if there is none.
+  std::optional<SpunUpGrip> spun_up_grip(const System& sys, int tube = -1) const;
+  // A quarter of the run guard's limit of one radian per step. An elastically held grip element
+  // only rocks about its twisted state: ω·dt stayed below 0.004 on the Table 4-1 rope under
+  // 64 nN·nm per element until it buckled, and below 0.1 while its bird cage formed; one driven
+  // round by its moment passes the limit tens of picoseconds before the guard stops the run.
+  static double spin_up_limit(const System& sys) { return 0.25 / sys.dt(); }
+  // The run guard's account of a runaway element whose tube's grip is spun up by its moment.
+  std::string explain_runaway(const System& sys, std::size_t i) const override;
   std::string phase(double t) const override { return std::string(twist_phase_name(phase_at(t))); }
 
   const TwistLoading& loading() const { return loading_; }
