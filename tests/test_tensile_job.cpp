@@ -141,6 +141,24 @@ TEST(TensileJob, StagesRunInOrderAndEachReports) {
   EXPECT_FALSE(ready.relax_stabilisation_ps().has_value());
 }
 
+TEST(TensileJob, TubesInTensionReportedWhenTheTestEndsAt2Percent) {
+  // A 2 % target ends the test 1 ps after 2 %, before the 10 ps window around 2 % closes: the
+  // fraction comes from the forces averaged from 2 % − 5 ps to the end (it was left out before).
+  // A test that stops short of 2 % has none (tiny_spec's 0.6 %).
+  TensileJobSpec s = tiny_spec();
+  s.monotonic.target_strain = 0.02;
+  TensileJob job(s, one_thread());
+  run(job);
+  const Summary sum = job.summary();
+  EXPECT_NEAR(num(sum, "final_strain"), 0.02, 1e-12);
+  const double f = num(sum, "tubes_in_tension_at_2pct");
+  EXPECT_GE(f, 0.0);
+  EXPECT_LE(f, 1.0);
+  TensileJob short_of(tiny_spec(), one_thread());
+  run(short_of);
+  EXPECT_EQ(find(short_of.summary(), "tubes_in_tension_at_2pct"), nullptr);
+}
+
 TEST(TensileJob, NanoparticlesDepositedAfterRelaxation) {
   TensileJobSpec s = tiny_spec();
   s.nanoparticles = 4;
