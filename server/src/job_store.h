@@ -39,6 +39,7 @@ struct JobRow {
   long last_frame_step = -1, last_snapshot_step = -1, last_progress_step = -1;
   bool columns_logged = false;
   std::string report_json;
+  v1::StudyRun study;  // empty study_id: a lone job
 
   // Ended (TIMEOUT included: only a ResumeJob queues it again).
   bool finished() const { return is_final(state); }
@@ -62,13 +63,15 @@ class JobStore {
   explicit JobStore(const std::string& path);
 
   // Queues a job, or returns the one this (user, request_id) created before. Throws LimitError
-  // when the user already has max_active queued or running jobs.
+  // when the user already has max_active queued or running jobs. study: the study the job is a
+  // run of (empty study_id: none), kept with the job and listed by list().
   SubmitResult submit(const std::string& user, const std::string& request_id,
-                      const v1::JobSpec& spec, const std::string& kind, long elements,
-                      long total_steps, int threads, long max_active, double time_limit_s = 0);
+                      const v1::JobSpec& spec, const v1::StudyRun& study, const std::string& kind,
+                      long elements, long total_steps, int threads, long max_active,
+                      double time_limit_s = 0);
   std::optional<JobRow> get(const std::string& id);
-  // Newest first; user empty = everyone's.
-  std::vector<JobRow> list(const std::string& user, int limit);
+  // Newest first; user empty = everyone's; study_id empty = every job, else that study's.
+  std::vector<JobRow> list(const std::string& user, int limit, const std::string& study_id = "");
 
   // After a restart: every RUNNING job goes back to QUEUED (a state event says from which
   // checkpoint it will resume). Returns their ids.
