@@ -290,43 +290,14 @@ BENCHMARK(BM_SparseFilmBonds)->Apply(one_and_two_threads);
 // The twist job's fixed scene: the thesis's 91-tube rope (N = 6, 50 segments, 4550 elements) with
 // bonds, vdW and its dashpots, under the rigid-grip torque ramp at local damping 0.1 — the
 // inner loop of the Table 4-1 runs, without the per-frame observables.
-void BM_TwistRopeSteps(benchmark::State& state) {
+// Steps of the rope under `set` (local damping 0.1 added), 48 per iteration (a multiple of every
+// respa_k benchmarked, so each timed chunk ends on an outer step).
+void twist_rope_steps(benchmark::State& state, IntegratorSettings set) {
   TwistJobSpec spec;
   spec.loading.torque_max = units::nNnm(64);
   spec.loading.rate = units::nNnm(1);
   spec.loading.hold = 100;
-  IntegratorSettings set;
-  set.threads = static_cast<int>(state.range(0));
   set.local_damping = 0.1;
-  TwistJob job(spec, set);
-  System& sys = job.system();
-  sys.initialize();
-  sys.run(50);
-  const long steps0 = sys.steps();
-  for (auto _ : state) sys.run(50);
-  const double steps = static_cast<double>(sys.steps() - steps0);
-  const double n = static_cast<double>(sys.elements().size());
-  state.counters["element_steps_per_s"] =
-      benchmark::Counter(n * steps, benchmark::Counter::kIsRate);
-  state.counters["elements"] = n;
-  state.counters["pairs"] = static_cast<double>(sys.neighbors()->pair_count());
-  state.counters["dt_fs"] = sys.dt() * 1e3;
-}
-BENCHMARK(BM_TwistRopeSteps)->Apply(one_and_two_threads)->Iterations(4);
-
-// Multiple time stepping (IntegratorSettings::respa_k) on the same rope at a fixed fine step of
-// 5 fs (the vdW's own safe outer step there is ~25 fs, so k <= 4): the vdW and its dashpots once
-// per k steps, bonds every step. element_steps_per_s counts inner steps.
-void BM_TwistRopeRespa(benchmark::State& state) {
-  TwistJobSpec spec;
-  spec.loading.torque_max = units::nNnm(64);
-  spec.loading.rate = units::nNnm(1);
-  spec.loading.hold = 100;
-  IntegratorSettings set;
-  set.threads = static_cast<int>(state.range(0));
-  set.local_damping = 0.1;
-  set.dt = 0.005;
-  set.respa_k = static_cast<int>(state.range(1));
   TwistJob job(spec, set);
   System& sys = job.system();
   sys.initialize();
@@ -337,7 +308,27 @@ void BM_TwistRopeRespa(benchmark::State& state) {
   const double n = static_cast<double>(sys.elements().size());
   state.counters["element_steps_per_s"] =
       benchmark::Counter(n * steps, benchmark::Counter::kIsRate);
+  state.counters["elements"] = n;
+  state.counters["pairs"] = static_cast<double>(sys.neighbors()->pair_count());
+  state.counters["dt_fs"] = sys.dt() * 1e3;
   state.counters["outer_critical_fs"] = sys.critical_outer_dt() * 1e3;
+}
+void BM_TwistRopeSteps(benchmark::State& state) {
+  IntegratorSettings set;
+  set.threads = static_cast<int>(state.range(0));
+  twist_rope_steps(state, set);
+}
+BENCHMARK(BM_TwistRopeSteps)->Apply(one_and_two_threads)->Iterations(4);
+
+// Multiple time stepping (IntegratorSettings::respa_k) on the same rope at a fixed fine step of
+// 5 fs (the vdW's own safe outer step there is ~25 fs, so k <= 4): the vdW and its dashpots once
+// per k steps, bonds every step. element_steps_per_s counts inner steps.
+void BM_TwistRopeRespa(benchmark::State& state) {
+  IntegratorSettings set;
+  set.threads = static_cast<int>(state.range(0));
+  set.dt = 0.005;
+  set.respa_k = static_cast<int>(state.range(1));
+  twist_rope_steps(state, set);
 }
 BENCHMARK(BM_TwistRopeRespa)
     ->ArgNames({"threads", "respa_k"})
