@@ -715,6 +715,16 @@ int run_submit(const std::vector<std::string>& args, std::ostream& out, std::ost
   return Watcher(client, store, info.job_id(), as_json, timeout, out, err).run();
 }
 
+// The job `id` (or a unique prefix) names in the local database; nullopt when none; UsageError for
+// an ambiguous prefix.
+std::optional<JobRecord> recorded_job(const ResultsStore& store, const std::string& id) {
+  try {
+    return store.find(id);
+  } catch (const StoreError& e) {  // an ambiguous prefix
+    throw UsageError(e.what());
+  }
+}
+
 int run_resume_timeout(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   FlagSpec fs{{"--db", "--reconnect-timeout", "--time-limit"}, {"--json", "--watch"}};
   add_connection_flags(fs);
@@ -723,12 +733,7 @@ int run_resume_timeout(const std::vector<std::string>& args, std::ostream& out, 
   const double grant_s = time_limit_flag(given);
   const double timeout = reconnect_timeout(given);
   ResultsStore store(db_path(given));
-  std::optional<JobRecord> rec;
-  try {
-    rec = store.find(given_id);
-  } catch (const StoreError& e) {  // an ambiguous prefix
-    throw UsageError(e.what());
-  }
+  std::optional<JobRecord> rec = recorded_job(store, given_id);
   if (rec && rec->server.empty())
     throw UsageError("job '" + rec->id + "' in " + store.path() +
                      " ran in a process of its own (`mdem run`), not on a daemon; only a "
@@ -763,12 +768,7 @@ int run_watch(const std::vector<std::string>& args, std::ostream& out, std::ostr
   const bool as_json = given.count("--json") > 0;
   const double timeout = reconnect_timeout(given);
   ResultsStore store(db_path(given));
-  std::optional<JobRecord> rec;
-  try {
-    rec = store.find(given_id);
-  } catch (const StoreError& e) {  // an ambiguous prefix
-    throw UsageError(e.what());
-  }
+  std::optional<JobRecord> rec = recorded_job(store, given_id);
   if (rec && rec->server.empty()) {
     if (is_final(rec->state)) return print_finished(store, *rec, as_json, out, err);
     throw UsageError("job '" + rec->id + "' in " + store.path() +
