@@ -59,10 +59,10 @@ long phase_start_step(const std::vector<JobEvent>& ev, std::initializer_list<std
   return -1;
 }
 
-// Runs a reference, then a victim killed -9 by its first checkpoint taken 200 steps into the
+// Runs a reference, then a victim killed -9 by its first checkpoint taken 20 steps into the
 // phase, and compares the resumed victim's log with the reference's.
 void kill_in_phase_and_compare(const std::string& dir, std::initializer_list<std::string> phases) {
-  DaemonProcess d(fresh_dir(dir), {"--checkpoint-every", "0.2"});
+  DaemonProcess d(fresh_dir(dir), {"--checkpoint-every", "0.05"});
   const std::string ref = submit_ok(d, kAliceToken, "reference", tiny_film_spec());
   const JobInfo ref_info = wait_finished(d, ref, 300);
   ASSERT_EQ(ref_info.state(), mdem::v1::SUCCEEDED) << ref_info.reason();
@@ -80,7 +80,9 @@ void kill_in_phase_and_compare(const std::string& dir, std::initializer_list<std
   ASSERT_GE(phase_start, 0) << "no progress in the phase";
 
   const std::string id = submit_ok(d, kAliceToken, "victim", tiny_film_spec());
-  wait_for(d, id, [&](const JobInfo& j) { return j.step() > phase_start + 200; });
+  // 20 steps in, checkpoints every 0.05 s: at the step the job picks after the pre-relaxation
+  // the test phase lasts a fraction of a second, and a checkpoint must come before it ends.
+  wait_for(d, id, [&](const JobInfo& j) { return j.step() > phase_start + 20; });
   const fs::path ckpt = checkpoint_path(d, id);
   std::error_code ec;
   const auto stamp = fs::last_write_time(ckpt, ec);
