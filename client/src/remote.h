@@ -112,11 +112,12 @@ class JobClient {
 
   v1::SubmitJobResponse submit(const v1::SubmitJobRequest& request);
   v1::JobInfo get(const std::string& job_id);
-  v1::ListJobsResponse list(bool all_users, int limit);
+  // study_id: only that study's jobs ("" = every job).
+  v1::ListJobsResponse list(bool all_users, int limit, const std::string& study_id = "");
   v1::JobInfo cancel(const std::string& job_id);
-
   // Queues a TIMEOUT job again with time_limit_s more running time (0: the daemon's default).
   v1::JobInfo resume(const std::string& job_id, double time_limit_s);
+
   std::unique_ptr<grpc::ClientContext> stream_context() const;
   // Waits until the channel is connected (starting a connection attempt) or `deadline`; true
   // when connected.

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "mdem/job_state.h"
 #include "mdem/event_order.h"  // event_order: frames and snapshots by (stage, step)
+#include "mdem/job_state.h"
 #include "mdem/sqlite_db.h"
 #include "mdem/v1/service.pb.h"
 

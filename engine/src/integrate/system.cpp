@@ -540,18 +540,18 @@ void System::run(long nsteps) {
     lap(mark, timers.integrate_s);
     for (auto& u : updaters_) u->apply(*this, time_);
     lap(mark, timers.updaters_s);
-    compute_forces(false, &timers);
+    compute_forces(false, &timers, true);
     mark = Clock::now();
 
     // 2. Local damping of the new forces, second half kick with the forces at t_{n+1}, the rest
     //    of the work and damping books, and the kinetic energy at t_{n+1}.
     const bool local = a_local > 0;
     const bool model_damping = sink_.has_damping();
+    const RespaSplit* net = respa_.on() ? &respa_ : nullptr;
+    const double w_net = respa_.net_weight(steps_);
     long bad = -1;
     double kt = 0, kr = 0;
     ordered_sums<4>(
-    const RespaSplit* net = respa_.on() ? &respa_ : nullptr;
-    const double w_net = respa_.net_weight(steps_);
         n, partial_sums_, {&work, &diss, &kt, &kr},
         [&](long i, std::array<double, 4>& sums) __attribute__((always_inline)) {
           double& work = sums[0];

@@ -255,6 +255,7 @@ void System::save_state(StateWriter& w) const {
         "energies and dt are not defined yet)");
   w.begin("system");
   w.put(threads_);
+  w.put(respa_.k());
   w.put(time_);
   w.put(dt_);
   w.put(dt_critical_);
@@ -266,6 +267,10 @@ void System::save_state(StateWriter& w) const {
   save_topology(w, el_.topology);
   save_groups(w, el_.groups);
   save_ledger(w, ledger_);
+  w.begin("respa");  // the slow models' energy held between outer steps
+  w.put(respa_.tally.stored);
+  for (const auto* a : {&respa_.f, &respa_.t, &respa_.fd, &respa_.td}) w.put(*a);
+  w.put(respa_.tags);
   w.begin("damping");
   // The *_prev_ arrays are empty today; saved so that bookkeeping using them resumes too.
   for (const auto* a : {&fd_, &td_, &f_prev_, &t_prev_, &fext_prev_, &text_prev_}) w.put(*a);
@@ -280,7 +285,6 @@ void System::save_state(StateWriter& w) const {
   }
 }
 
-  w.put(respa_.k());
 void System::load_state(StateReader& r) {
   // Sizes the sinks and damping buffers, creates the neighbour list and checks the settings; the
   // state it computes is then overwritten.
@@ -291,11 +295,12 @@ void System::load_state(StateReader& r) {
     r.fail("threads", "checkpoint was written running " + std::to_string(threads) +
                           " threads, this system runs " + std::to_string(threads_) +
                           ": a bit-identical resume needs the same thread count");
+  const int respa_k = r.get<int>("respa_k");
+  if (respa_k != respa_.k())
+    r.fail("respa_k", "checkpoint was written with respa_k = " + std::to_string(respa_k) +
+                          ", this job runs respa_k = " + std::to_string(respa_.k()) +
+                          ": its forces hold the other split (multiple time stepping)");
   time_ = r.get<double>("time");
-  w.begin("respa");  // the slow models' energy held between outer steps
-  w.put(respa_.tally.stored);
-  for (const auto* a : {&respa_.f, &respa_.t, &respa_.fd, &respa_.td}) w.put(*a);
-  w.put(respa_.tags);
   dt_ = r.get<double>("dt");
   dt_critical_ = r.get<double>("dt_critical");
   steps_ = r.get<long>("steps");
@@ -319,17 +324,25 @@ void System::load_state(StateReader& r) {
   load_topology(r, el_);
   load_groups(r, el_);
   load_ledger(r, ledger_);
+  r.begin("respa");
+  respa_.tally = EnergyTally{};
+  respa_.tally.stored = r.get<decltype(respa_.tally.stored)>("slow energy");
+  const std::size_t held = respa_.on() ? el_.size() : 0;
+  for (auto* a : {&respa_.f, &respa_.t, &respa_.fd, &respa_.td}) r.get(*a, "slow forces", held);
+  r.get(respa_.tags, "slow force tags", held);
+  if (respa_.on()) {
+    std::vector<std::uint64_t> saved = respa_.tags, have = el_.tag;
+    std::sort(saved.begin(), saved.end());
+    std::sort(have.begin(), have.end());
+    if (saved != have) r.fail("slow force tags", "are not the tags of this job's elements");
+    respa_.follow(el_);
+  }
 
   r.begin("damping");
   const std::size_t n = el_.size();
   r.get(fd_, "fd", n);
   r.get(td_, "td", n);
   local_damping_was_on_ = true;  // the loaded fd_/td_ may hold local damping
-  const int respa_k = r.get<int>("respa_k");
-  if (respa_k != respa_.k())
-    r.fail("respa_k", "checkpoint was written with respa_k = " + std::to_string(respa_k) +
-                          ", this job runs respa_k = " + std::to_string(respa_.k()) +
-                          ": its forces hold the other split (multiple time stepping)");
   for (auto* a : {&f_prev_, &t_prev_, &fext_prev_, &text_prev_}) r.get(*a, "work bookkeeping");
   const bool has_list = r.get_bool("has neighbour list");
   if (has_list != !pairs_.empty())
@@ -350,16 +363,3 @@ void System::load_state(StateReader& r) {
 }
 
 }  // namespace mdem
-  r.begin("respa");
-  respa_.tally = EnergyTally{};
-  respa_.tally.stored = r.get<decltype(respa_.tally.stored)>("slow energy");
-  const std::size_t held = respa_.on() ? el_.size() : 0;
-  for (auto* a : {&respa_.f, &respa_.t, &respa_.fd, &respa_.td}) r.get(*a, "slow forces", held);
-  r.get(respa_.tags, "slow force tags", held);
-  if (respa_.on()) {
-    std::vector<std::uint64_t> saved = respa_.tags, have = el_.tag;
-    std::sort(saved.begin(), saved.end());
-    std::sort(have.begin(), have.end());
-    if (saved != have) r.fail("slow force tags", "are not the tags of this job's elements");
-    respa_.follow(el_);
-  }

@@ -123,12 +123,11 @@ class ForceModel : public ElementIndexHolder {
   void bind_domain(const Domain* d) { domain_ = d ? d : &kOpenDomain; }
   const Domain& domain() const { return *domain_; }
 
+  // State that changes during a run (a bond's plastic slip, broken flags), for checkpoints; the
+  // system saves and loads it in a section named after the model. Stateless models keep these.
   // Bytes of the model's own per-element or per-pair data (bonds, cached axes; capacities), for
   // System::memory_bytes; 0 for a model that holds only parameters.
   virtual std::size_t memory_bytes() const { return 0; }
-
-  // State that changes during a run (a bond's plastic slip, broken flags), for checkpoints; the
-  // system saves and loads it in a section named after the model. Stateless models keep these.
   virtual void save_state(StateWriter&) const {}
   virtual void load_state(StateReader&) {}
 

@@ -74,7 +74,7 @@ struct IntegratorSettings {
   // at most half the skin between rebuilds, so the order decays slowly, and a reordering costs
   // about as much as a rebuild.
   int memory_order_every = 10;
-  int threads = 0;             // 0: OpenMP's default
+  int threads = 0;  // 0: OpenMP's default
   // Run guard.
   int guard_every = 100;  // steps between energy-balance checks
   // Unexplained energy growth, as a fraction of the energy in play (initial kinetic energy, work
@@ -84,13 +84,13 @@ struct IntegratorSettings {
   // Off: a fixed dt above safety × critical step is taken as given instead of refused (stability
   // studies probe the limit; the run guard still stops what goes unstable). No spec field sets it.
   bool check_dt = true;
-};
-
-class System {
   // Multiple time stepping (respa.h): slow models (Timescale::Slow) once every respa_k steps of dt
   // as impulses, fast ones every step. [1, limits::kMaxRespaK]; 1 = off (plain velocity Verlet).
   // respa_k·dt must stay within safety × the slow models' critical step (else ConfigError).
   int respa_k = 1;
+};
+
+class System {
  public:
   explicit System(Elements el, IntegratorSettings s = {});
   ~System();
@@ -163,12 +163,18 @@ class System {
   double critical_dt() const { return dt_critical_; }
   // Largest safe step = safety × critical step.
   double max_safe_dt() const { return settings_.safety * dt_critical_; }
-  int threads() const { return threads_; }
-
-  // Reorders the elements (new_to_old, as Elements::reorder) and remaps every index the system,
   // With respa_k > 1: the critical step of the slow models alone, which bounds the outer step
   // respa_k·dt (infinite without slow models or with respa_k = 1).
   double critical_outer_dt() const { return dt_critical_outer_; }
+  int threads() const { return threads_; }
+
+  // Bytes the system's data holds now (container capacities): the element arrays, the force
+  // buffers (per thread), the neighbour lists and each model's own data (bonds; ForceModel::
+  // memory_bytes). Shared objects (the domain, groups, topology) and the heap's overhead are not
+  // counted. O(models + lists), no pass over the elements: cheap enough to sample at every poll.
+  std::size_t memory_bytes() const;
+
+  // Reorders the elements (new_to_old, as Elements::reorder) and remaps every index the system,
   // its models and updaters hold; the neighbour sub-lists are rebuilt at the next evaluation.
   // Throws ConfigError, changing nothing, when a model or updater does not follow a reordering,
   // and std::invalid_argument when new_to_old is not a permutation of the elements.
@@ -179,12 +185,6 @@ class System {
 
   // Wall time of run()'s parts since the system was made (step_timers.h).
   const StepTimers& timers() const { return timers_; }
-
-  // Bytes the system's data holds now (container capacities): the element arrays, the force
-  // buffers (per thread), the neighbour lists and each model's own data (bonds; ForceModel::
-  // memory_bytes). Shared objects (the domain, groups, topology) and the heap's overhead are not
-  // counted. O(models + lists), no pass over the elements: cheap enough to sample at every poll.
-  std::size_t memory_bytes() const;
 
   const EnergyLedger& energy() const { return ledger_; }
   // |W_ext − (ΔE + E_diss)| over the energy in play: the largest of the initial kinetic energy,
@@ -269,10 +269,10 @@ class System {
   double energy_scale_ = 0;  // energy in play, for relative errors
   double initial_kinetic_ = 0, initial_stored_ = 0;
   double time_ = 0, dt_ = 0, dt_critical_ = 0;
+  double dt_critical_outer_ = std::numeric_limits<double>::infinity();
   long steps_ = 0;
   std::size_t reorders_ = 0;
   int threads_ = 1;
-  double dt_critical_outer_ = std::numeric_limits<double>::infinity();
   bool initialized_ = false;
   bool dissipative_ = false;
   bool local_damping_was_on_ = false;  // fd_/td_ may hold local damping to clear
