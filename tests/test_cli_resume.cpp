@@ -45,9 +45,16 @@ using Clock = std::chrono::steady_clock;
 using Args = std::vector<std::string>;
 
 // A small twist (7 tubes of 10 segments), long enough to be stopped halfway, with snapshots.
-const Args kTwist = {"twist", "--layers", "2",  "--length",  "13.56", "--torque",
-                     "2",     "--hold",   "60", "--threads", "1",     "--snapshot-every",
-                     "10"};
+// It runs ~1 s on an idle core: long against the 0.1 s checkpoint interval, so the run cannot end
+// before the test has seen a checkpoint and stops it (with a 60 ps hold it ran 0.11 s and a fast
+// machine finished it first).
+const Args kTwist = {"twist", "--layers", "2",   "--length",  "13.56", "--torque",
+                     "2",     "--hold",   "600", "--threads", "1",     "--snapshot-every",
+                     "100"};
+// The refusals' subject, stopped long before its end: the same job with a hold ten times longer.
+const Args kTwistLong = {"twist", "--layers", "2",    "--length",  "13.56", "--torque",
+                         "2",     "--hold",   "6000", "--threads", "1",     "--snapshot-every",
+                         "100"};
 // A tiny tensile film (16 tubes of 40 segments, 8 NPs) through all its stages: relaxation,
 // deposit, NP pre-relaxation, ramp and straining; the stages restart their step count.
 const Args kTensile = {
@@ -255,7 +262,7 @@ class CliResumeRefusal : public ::testing::Test {
     clear_mdem_env();
     dir_ = new fs::path(fresh_dir("resume-refusals"));
     db_ = new std::string((*dir_ / "results.db").string());
-    const auto [pid, id] = start_until_checkpoint(*dir_, kTwist, *db_, 3);
+    const auto [pid, id] = start_until_checkpoint(*dir_, kTwistLong, *db_, 3);
     ASSERT_GT(pid, 0);
     EXPECT_EQ(stop(pid, SIGINT), mdem::cli::kJobFailed);
     id_ = new std::string(id);

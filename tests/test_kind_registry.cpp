@@ -345,9 +345,11 @@ TEST(KindRegistry, AccuracyFieldsAreJsonOnlyInEveryLayout) {
   for (const mdem::JobKind& kind : mdem::job_kinds().all()) {
     nlohmann::ordered_json summary = nlohmann::ordered_json::object();
     for (const mdem::SummaryField& f : kind.summary) summary[f.key] = 1.0;
-    for (const mdem::SummaryField& f : kind.summary)
-      if (f.key == "energy_balance_error" || f.key == "dt_ps" || f.key == "critical_dt_ps")
+    for (const mdem::SummaryField& f : kind.summary) {
+      if (f.key == "energy_balance_error" || f.key == "dt_ps" || f.key == "critical_dt_ps") {
         EXPECT_EQ(f.line, 0) << kind.name << ": " << f.key;
+      }
+    }
     const std::vector<std::string> lines = mdem::summary_lines(kind.summary, summary);
     EXPECT_FALSE(lines.empty()) << kind.name;
     for (const std::string& line : lines)

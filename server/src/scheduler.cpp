@@ -195,10 +195,16 @@ void Scheduler::run(const JobRow& row, Control& ctl) {
         std::max(ctl.usage.daemon_rss_peak_bytes, process_rss_peak_bytes());
     return ctl.usage;
   };
-  // Into the store, with the running time (before the state event that ends this run).
+  // Into the store, with the running time (before the state event that ends this run). Best
+  // effort: a store that does not take writes (a full disk) must not keep the job from ending -
+  // its end events wait for the disk below (flush_retrying); the usage figures are then lost.
   auto record_usage = [&] {
     const Usage u = sample();
-    store_.set_usage(row.id, u.elapsed_s, u.peak_bytes, u.daemon_rss_peak_bytes);
+    try {
+      store_.set_usage(row.id, u.elapsed_s, u.peak_bytes, u.daemon_rss_peak_bytes);
+    } catch (const SqliteError& e) {
+      spdlog::warn("event=usage_not_recorded job={} error=\"{}\"", row.id, e.what());
+    }
   };
   JobState state = v1::SUCCEEDED;
   std::string reason;
