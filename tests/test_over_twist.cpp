@@ -182,7 +182,10 @@ TEST(OverTwist, CliReportsAndPrintsTheOutcome) {
   EXPECT_EQ(sum["outcome_time_ps"], sum["simulated_ps"]);
   std::ostringstream out, err;
   cli::print_report(out, err, j, std::nullopt);
-  EXPECT_NE(out.str().find("outcome separated_by_over_twist, at "), std::string::npos) << out.str();
+  EXPECT_NE(out.str().find("outcome separated_by_over_twist, separated tube " +
+                           std::to_string(sum["separated_tube"].get<int>()) + ", "),
+            std::string::npos)
+      << out.str();
 }
 
 // Below the separation nothing is reported: a held tube completes its hold.

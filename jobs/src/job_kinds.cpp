@@ -60,6 +60,8 @@ std::vector<std::string> summary_lines(const SummaryLayout& layout,
   if (!summary.is_object()) return {};
   for (const SummaryField& f : layout) {
     if (f.line == 0 || !summary.contains(f.key)) continue;
+    if (f.none_if_negative && summary[f.key].is_number() && summary[f.key].get<double>() < 0)
+      continue;
     std::string& line = lines[f.line];
     line += (line.empty() ? "" : ", ") + f.label + " " + summary_value_text(f, summary[f.key]);
   }

@@ -53,8 +53,11 @@ JobKind twist_job_kind() {
   // Results (the last flag): the end state a user reads - twist angle, end shift, radius, Q.
   k.summary = {
       {"outcome", SummaryField::Type::Label, "", "outcome", 1, 6, true},
-      {"outcome_time_ps", SummaryField::Type::Real, "ps", "at", 1, 6, false},
-      {"separated_tube", SummaryField::Type::Count, "", "separated tube (-1: none)", 1, 6, false},
+      // When the outcome was reached (the end of the hold, or the separation, where the run ends:
+      // the "simulated" time says it): in the JSON.
+      {"outcome_time_ps", SummaryField::Type::Real, "ps", "at", 0, 6, false},
+      {"separated_tube", SummaryField::Type::Count, "", "separated tube", 1, 6, false, false, 1.0,
+       true},
       {"morphology", SummaryField::Type::Label, "", "morphology", 1, 6, true},
       {"twist_angle_deg", SummaryField::Type::Real, "deg", "twist angle", 1, 6, false, true},
       {"shift_angle_deg", SummaryField::Type::Real, "deg", "end shift", 1, 6, false, true},

@@ -32,6 +32,9 @@ struct SummaryField {
   bool result = false;
   // Printed as value × scale (100: a fraction printed in %, unit "%"); the JSON keeps the value.
   double scale = 1.0;
+  // A count whose negative value means "none" (a separated tube's number, -1 when no tube
+  // separated): not printed then; the JSON keeps it.
+  bool none_if_negative = false;
 };
 using SummaryLayout = std::vector<SummaryField>;
 
