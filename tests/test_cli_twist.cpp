@@ -53,6 +53,12 @@ TEST(CliTwist, SmallJobReportsJsonAndStoresItsResults) {
   EXPECT_GT(j["performance"]["steps"].get<long>(), 50);
   EXPECT_GT(j["performance"]["element_steps_per_s"].get<double>(), 0);
   EXPECT_GT(j["performance"]["wall_s"].get<double>(), 0);
+  // The job's data: the element arrays alone hold more than 200 bytes per element (positions,
+  // velocities, orientations, spins, forces, torques as doubles); bonds, lists and per-thread
+  // buffers add a few times that, never 50 kB per element.
+  const double data = j["performance"]["job_data_bytes"].get<double>();
+  EXPECT_GT(data, 200.0 * 42);
+  EXPECT_LT(data, 50e3 * 42);
 
   mdem::cli::ResultsStore store(db);
   const auto rec = store.find(j["job_id"].get<std::string>());
@@ -74,6 +80,15 @@ TEST(CliTwist, SmallJobReportsJsonAndStoresItsResults) {
   const auto cols = store.columns(rec->id);
   EXPECT_NE(std::find(cols.begin(), cols.end(), "topological_charge"), cols.end());
   EXPECT_NE(std::find(cols.begin(), cols.end(), "bond_torsion_eV"), cols.end());
+  // `mdem show` of the local run says how long it ran and its data's size.
+  const auto show = mdem::testing::run_shell(std::string(MDEM_CLI_PATH) + " show " + rec->id +
+                                             " --db " + db + " 2>&1");
+  ASSERT_EQ(show.code, 0) << show.out;
+  const auto elapsed = show.out.find("elapsed:"), memory = show.out.find("memory:");
+  ASSERT_NE(elapsed, std::string::npos) << show.out;
+  ASSERT_NE(memory, std::string::npos) << show.out;
+  EXPECT_EQ(show.out.find(" 00:00:0", elapsed), show.out.find_first_of('0', elapsed) - 1);
+  EXPECT_EQ(show.out.find("job data 0.", memory), show.out.find_first_not_of(' ', memory + 7));
 }
 
 TEST(CliTwist, SpecFileAndFlagsCombineWithFlagsWinning) {

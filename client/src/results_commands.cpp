@@ -9,6 +9,7 @@
 #include "mdem/cli.h"
 #include "mdem/job_kinds.h"
 #include "mdem/job_state.h"
+#include "mdem/time_text.h"
 #include "plot.h"
 #include "remote.h"
 #include "remote_commands.h"
@@ -299,6 +300,20 @@ void print_job(std::ostream& os, const JobRecord& job, const std::vector<std::st
   if (!job.reason.empty()) rows.push_back({"reason:", job.reason});
   rows.push_back({"created:", job.created_at});
   rows.push_back({"finished:", job.finished_at.empty() ? "-" : job.finished_at});
+  // From the report's performance block (a local run's; the daemon's show has its own rows).
+  const json report = parse_or_text(job.summary_json);
+  if (report.is_object() && report.contains("performance") && report["performance"].is_object()) {
+    const json& perf = report["performance"];
+    if (perf.contains("wall_s") && perf["wall_s"].is_number())
+      rows.push_back({"elapsed:", duration_text(perf["wall_s"].get<double>())});
+    if (perf.contains("job_data_bytes") && perf["job_data_bytes"].is_number()) {
+      char mb[32];
+      std::snprintf(mb, sizeof mb, "%.1f", perf["job_data_bytes"].get<double>() / 1e6);
+      rows.push_back({"memory:", std::string("job data ") + mb +
+                                     " MB (its peak; the run's last "
+                                     "lines give the process's)"});
+    }
+  }
   std::string cols;
   for (const std::string& c : columns) cols += (cols.empty() ? "" : ", ") + c;
   rows.push_back({"frames:", std::to_string(frames) + (cols.empty() ? "" : " (" + cols + ")")});

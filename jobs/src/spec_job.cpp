@@ -76,6 +76,9 @@ ReportJson performance_json(const System& sys, double wall_s) {
   perf["steps"] = sys.steps();
   perf["threads"] = sys.threads();
   perf["element_steps_per_s"] = wall_s > 0 ? n * sys.steps() / wall_s : 0.0;
+  // The simulation data's size at the end (System::memory_bytes: capacities, which only grow
+  // during a run, so also its peak), for `mdem show` of a local run.
+  perf["job_data_bytes"] = sys.memory_bytes();
   return perf;
 }
 
