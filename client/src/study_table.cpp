@@ -156,7 +156,9 @@ void print_study_table(std::ostream& out, const StudyTable& t) {
     row.push_back(num(r.balance_error, 3));
     for (std::size_t k = 0; k < t.results.size(); ++k) {
       const auto it = r.results.find(t.results[k].key);
-      row.push_back(r.succeeded && it != r.results.end() ? num(it->second) : "-");
+      // Printed in the field's unit: value × scale (a fraction in %), as the run's summary.
+      const double scale = t.results[k].scale;
+      row.push_back(r.succeeded && it != r.results.end() ? num(it->second * scale) : "-");
       if (k >= t.errors.results.size()) {
         row.push_back("-");
         continue;
@@ -165,7 +167,8 @@ void print_study_table(std::ostream& out, const StudyTable& t) {
       // Relative where the reference is not zero, else the difference in the result's unit.
       const bool rel = std::isfinite(e.relative[i]);
       row.push_back(rel ? num(100 * e.relative[i], 3) + "%"
-                        : num(e.error[i], 3) + (e.field.unit.empty() ? "" : " " + e.field.unit));
+                        : num(e.error[i] * scale, 3) +
+                              (e.field.unit.empty() ? "" : " " + e.field.unit));
     }
     rows.push_back(std::move(row));
   }
@@ -173,7 +176,7 @@ void print_study_table(std::ostream& out, const StudyTable& t) {
   print_table(out, rows);
   out << "reference: " << t.reference << "\n";
   for (const ResultError& e : t.errors.results) {
-    out << "  " << e.field.label << ": " << num(e.reference, 8)
+    out << "  " << e.field.label << ": " << num(e.reference * e.field.scale, 8)
         << (e.field.unit.empty() ? "" : " " + e.field.unit)
         << (e.extrapolated ? " (extrapolated), observed order " + num(e.order, 3)
                            : " (the most accurate run)");
