@@ -37,7 +37,7 @@ class NpCntKernel {
  public:
   static constexpr bool kDissipative = false;
   static constexpr Timescale kTimescale = Timescale::Slow;  // r-RESPA outer step
-  static constexpr bool kTorques = true;  // on the segment only
+  static constexpr bool kTorques = true;                    // on the segment only
   static constexpr EnergyTerm kTerm = EnergyTerm::NpCnt;
 
   // Throws std::invalid_argument naming the parameter and its allowed range.
