@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -45,6 +46,23 @@ inline std::string slurp(const std::filesystem::path& path) {
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();
+}
+
+// Seconds since t0 on the steady clock.
+inline double since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The user's mdem settings would change what the CLI does: none of them (for tests that run it).
+inline void clear_mdem_env() {
+  for (const char* v : {"MDEM_SERVER", "MDEM_TOKEN", "MDEM_CONFIG", "MDEM_DB"}) ::unsetenv(v);
+}
+
+// a followed by b (command lines built from parts).
+inline std::vector<std::string> operator+(std::vector<std::string> a,
+                                          const std::vector<std::string>& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
 }
 
 inline bool contains(const std::string& s, const std::string& part) {

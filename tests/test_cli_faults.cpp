@@ -35,6 +35,9 @@ using mdem::testing::DaemonProcess;
 using mdem::testing::fresh_dir;
 using mdem::testing::slurp;
 using Clock = std::chrono::steady_clock;
+using mdem::testing::clear_mdem_env;
+using mdem::testing::since;
+using mdem::testing::operator+;
 
 // A small twist job that runs for minutes unless stopped (it is always stopped or watched).
 const std::vector<std::string> kLongTwist = {"twist",   "--layers",  "2", "--length",
@@ -45,23 +48,9 @@ const std::vector<std::string> kShortTwist = {"twist", "--layers",  "2", "--leng
                                               "13.56", "--torque",  "2", "--hold",
                                               "10",    "--threads", "1"};
 
-double since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-// The user's mdem settings would change what the CLI does: none of them.
-void clear_mdem_env() {
-  for (const char* v : {"MDEM_SERVER", "MDEM_TOKEN", "MDEM_CONFIG", "MDEM_DB"}) ::unsetenv(v);
-}
-
 std::vector<std::string> mdem(std::vector<std::string> args) {
   args.insert(args.begin(), MDEM_CLI_PATH);
   return args;
-}
-
-std::vector<std::string> operator+(std::vector<std::string> a, const std::vector<std::string>& b) {
-  a.insert(a.end(), b.begin(), b.end());
-  return a;
 }
 
 // Waits for `pid` up to timeout_s: its exit code, -1 when a signal ended it, -2 when it was

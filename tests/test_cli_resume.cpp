@@ -41,6 +41,9 @@ using mdem::testing::DaemonProcess;
 using mdem::testing::fresh_dir;
 using mdem::testing::slurp;
 using Clock = std::chrono::steady_clock;
+using mdem::testing::clear_mdem_env;
+using mdem::testing::since;
+using mdem::testing::operator+;
 
 using Args = std::vector<std::string>;
 
@@ -63,20 +66,7 @@ const Args kTensile = {
     "1",       "--rate",           "1e-3", "--ramp",  "10", "--threads",    "1",  "--seed",
     "3",       "--snapshot-every", "10"};
 
-Args operator+(Args a, const Args& b) {
-  a.insert(a.end(), b.begin(), b.end());
-  return a;
-}
-
 Args mdem_cmd(const Args& args) { return Args{MDEM_CLI_PATH, "run"} + args; }
-
-double since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-void clear_mdem_env() {
-  for (const char* v : {"MDEM_SERVER", "MDEM_TOKEN", "MDEM_CONFIG", "MDEM_DB"}) ::unsetenv(v);
-}
 
 // The only job of a database.
 std::string only_job(const std::string& db) {

@@ -42,10 +42,8 @@ using mdem::testing::contains;
 using mdem::testing::TempDir;
 using json = nlohmann::json;
 using Clock = std::chrono::steady_clock;
-
-double since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
+using mdem::testing::since;
+using mdem::testing::operator+;
 
 // One line of the suite's table (docs/stability.md): the case, what happened, the wall time.
 void note(const std::string& name, const std::string& what, double wall_s) {
@@ -139,11 +137,6 @@ CliRun mdem_run(const std::string& kind, const std::vector<std::string>& args,
 // A rope of 7 tubes x 10 segments (70 elements) on one thread.
 const std::vector<std::string> kSmallRope = {"--layers", "2",         "--length",
                                              "13.56",    "--threads", "1"};
-
-std::vector<std::string> operator+(std::vector<std::string> a, const std::vector<std::string>& b) {
-  a.insert(a.end(), b.begin(), b.end());
-  return a;
-}
 
 // Torque 10x the thesis's 64 nN·nm is outside the spec's range: refused before any work,
 // naming the field, its flag and the range.
