@@ -30,6 +30,7 @@
 //       // closer than cutoff(), in list order, and adds the results in the same order, so a
 //       // kernel with a batch path must not act beyond its cutoff, and f2 = −f1 (no external
 //       // force on the pair)
+//   void touch(std::uint32_t j) const;  // with batch(): prefetch what batch() reads of element j
 // PairModel<K> makes a ForceModel of it.
 #include <omp.h>
 
@@ -148,9 +149,23 @@ template <bool kPeriodic, bool kFilter, class K>
   }
 }
 
+// Prefetch of the cache line(s) holding *p (a Vec3 of 24 bytes may straddle two lines).
+template <int kWrite>
+inline void prefetch_vec3(const Vec3* p) {
+  __builtin_prefetch(p, kWrite, 3);
+  __builtin_prefetch(reinterpret_cast<const char*>(p) + sizeof(Vec3) - 1, kWrite, 3);
+}
+
+// How far ahead in the neighbour list the gather prefetches x_j.
+inline constexpr std::uint32_t kPrefetchAhead = 16;
+
 // The driver of a batched kernel: as run(), but the pairs within the cutoff are gathered into a
 // per-thread PairBatch (in list order, branch-free) and evaluated a batch at a time; the results
 // are added to the thread's buffers in the same order, so the sums are the same run to run.
+// The j of a listed pair sit anywhere in memory (another tube), and waiting on their cache misses
+// (x_j at the gather, f_j and t_j at the scatter, the kernel's own per-element data) was most of
+// the driver's time: the gather prefetches x_j kPrefetchAhead pairs ahead, and, for each pair
+// gathered, the lines the scatter and the kernel (touch()) will use once the batch is full.
 template <bool kPeriodic, bool kFilter, class K>
 void run_batched(const K& k, const Elements& el, const NeighborList& list, ForceSink& sink,
                  bool threaded) {
@@ -181,15 +196,20 @@ void run_batched(const K& k, const Elements& el, const NeighborList& list, Force
       }
       b.n = 0;
     };
+    const std::uint32_t listed = static_cast<std::uint32_t>(nb.size());
 #pragma omp for schedule(static, 64)
     for (long i = 0; i < n; ++i) {
       const std::uint32_t begin = off[i], end = off[i + 1];
       const Vec3 xi = el.x[i];
       for (std::uint32_t m = begin; m < end; ++m) {
         const std::uint32_t j = nb[m];
+        if (m + kPrefetchAhead < listed) prefetch_vec3<0>(&el.x[nb[m + kPrefetchAhead]]);
         if constexpr (kFilter) {
           if (k.excludes(el, i, j)) continue;
         }
+        prefetch_vec3<1>(f + j);
+        if constexpr (K::kTorques) prefetch_vec3<1>(t + j);
+        if constexpr (requires { k.touch(j); }) k.touch(j);
         const Vec3 d = displacement<kPeriodic>(domain, xi, el.x[j]);
         // Written to the next free lane, kept when within the cutoff (a NaN is kept too).
         b.i[b.n] = static_cast<std::uint32_t>(i);
