@@ -250,6 +250,93 @@ double radial_bound(const VdwConstants& k, double R, double delta) {
          2.0 * (std::abs(dM * dfc * v) + std::abs(dM * fc * dv) * a + std::abs(M * dfc * dv) * a);
 }
 
+// Bound of the vdW's rotational stiffness: B ≥ |∂²U/∂φ_α ∂φ_β| for unit rotations φ_α, φ_β of
+// either segment (both of one segment: the diagonal 3×3 blocks; one of each: the off-diagonal
+// block), so B bounds the spectral norm of every rotational block of the pair's Hessian.
+//
+// Derivation. A rotation φ a (|a| = 1) of segment 1 moves b1 to b1 + φ a×b1 + ½φ² a×(a×b1), and R,
+// n do not change, so along it, with ' = d/dφ (or ∂/∂φ_β for the second derivative):
+//   c' = a·(b1×b2), |c'| ≤ |b1×b2| = √(1−c²) =: g_c;  c'' = −b1⊥a·b2 or (a×b1)·(a'×b2), |c''| ≤ 1;
+//   p1' = a·(b1×n), |p1'| ≤ √(1−p1²) ≤ g_p := max_i √(1−p_i²);  |p1''| ≤ 1  (segment 2 alike).
+// u = q² h with q = p1 + s p2, h = 1/(2(1 + s c)) (one flip sign s), h' = −2 s h² c',
+// h'' = 8 h³ c'c' − 2 s h² c'':
+//   |u'|  ≤ u1 := 2|q| h g_p + 2 q² h² g_c,
+//   |u''| ≤ u2 := 2 h g_p² + 8 |q| h² g_c g_p + 2 |q| h + q² (8 h³ g_c² + 2 h²).
+// In the flip blend (|c| < flip_blend) u = (1−w) u₋ + w u₊ with the smoothstep w(c), so
+//   |u'|  ≤ max(u1±) + |w_c| g_c |u₊−u₋|,
+//   |u''| ≤ max(u2±) + 2 |w_c| g_c (u1₊ + u1₋) + (|w_cc| g_c² + |w_c|) |u₊−u₋|.
+// δ(u) is the degree-5 polynomial P(y), y = 2u − 1: δ_u = 2P'(y), δ_uu = 4P''(y), so
+//   |δ'| ≤ |δ_u| u1,   |δ''| ≤ |δ_uu| u1² + |δ_u| u2.
+// D = X/δ − 2 with X = R/r: D' = −X δ'/δ², D'' = 2X δ'²/δ³ − X δ''/δ², and M = 1 + 2W(1−c²):
+// |M'| ≤ 4W|c| g_c, |M''| ≤ 4W(g_c² + |c|). Then U = f_c M V(D) (f_c, W depend on R only):
+//   U'' = f_c (M'' V + 2 M' V' D' + M (V'' D'D' + V' D''))
+//   B   = f_c (|M''||V| + 2|M'||V'||D'|max + M (|V''| D'max² + |V'| D''max)),
+// with V'' = 0 on the linear overlap branch (D < d_min). There |V'| is the branch's large slope
+// and the |V'| D'' term (the δ(θ) curvature) dominates: the term the radial-curvature estimate
+// k_t r² missed (docs/stability.md, crossed overlapping tubes). Coincident centres: U = M V(−2),
+// so B = |M''||V(−2)|.
+double rotational_bound(const VdwConstants& k, double R, double c, double p1, double p2) {
+  const VdwParams& p = k.p;
+  if (!(R < p.cutoff())) return 0.0;
+  const double ac = std::min(std::abs(c), 1.0);
+  const double gc = std::sqrt(std::max(0.0, 1.0 - c * c));
+  double w, dw;
+  if (R * R < kCoincident2) {
+    w_of_r(k, 0.0, 0.0, w, dw);
+    double v, dv;
+    potential(k, -2.0, v, dv);
+    return 4.0 * w * (gc * gc + ac) * std::abs(v);
+  }
+  const double gp = std::sqrt(std::max({0.0, 1.0 - p1 * p1, 1.0 - p2 * p2}));
+  struct Signed {
+    double u, u1, u2;
+  };
+  const auto signed_bounds = [&](double s) {
+    const double q = std::abs(p1 + s * p2);
+    const double h = 0.5 / (1.0 + s * c);
+    return Signed{q * q * h, 2.0 * q * h * gp + 2.0 * q * q * h * h * gc,
+                  2.0 * h * gp * gp + 8.0 * q * h * h * gc * gp + 2.0 * q * h +
+                      q * q * (8.0 * h * h * h * gc * gc + 2.0 * h * h)};
+  };
+  const double blend = p.flip_blend;
+  double u, u1, u2;
+  if (!(std::abs(c) < blend)) {
+    const Signed a = signed_bounds(c < 0.0 ? -1.0 : 1.0);
+    u = a.u, u1 = a.u1, u2 = a.u2;
+  } else {
+    const Signed a = signed_bounds(1.0), b = signed_bounds(-1.0);
+    const double t = 0.5 * (c + blend) / blend;
+    const double wt = t * t * (3.0 - 2.0 * t);
+    const double w_c = 3.0 * t * (1.0 - t) / blend;
+    const double w_cc = 1.5 * std::abs(1.0 - 2.0 * t) / (blend * blend);
+    const double du = std::abs(a.u - b.u);
+    u = b.u + wt * (a.u - b.u);
+    u1 = std::max(a.u1, b.u1) + w_c * gc * du;
+    u2 = std::max(a.u2, b.u2) + 2.0 * w_c * gc * (a.u1 + b.u1) + (w_cc * gc * gc + w_c) * du;
+  }
+  const auto& a = k.delta_poly;
+  const double y = 2.0 * u - 1.0;
+  double delta, delta_u;
+  delta_of_u(k, u, delta, delta_u);
+  const double delta_uu = 4.0 * (2 * a[2] + y * (6 * a[3] + y * (12 * a[4] + y * 20 * a[5])));
+  const double d1 = std::abs(delta_u) * u1;
+  const double d2 = std::abs(delta_uu) * u1 * u1 + std::abs(delta_u) * u2;
+  const double X = R * k.inv_r;
+  const double D1 = X * d1 / (delta * delta);
+  const double D2 = 2.0 * X * d1 * d1 / (delta * delta * delta) + X * d2 / (delta * delta);
+  const double d = X / delta - 2.0;
+  double v, dv;
+  potential(k, d, v, dv);
+  const double ddv = d >= p.d_min ? lj_second(p, k.four_eps, d) : 0.0;
+  double fc, dfc;
+  cutoff_fn(k, R, fc, dfc);
+  w_of_r(k, R, 1.0 / R, w, dw);
+  const double M = 1.0 + 2.0 * w * (1.0 - c * c);
+  const double M1 = 4.0 * w * ac * gc, M2 = 4.0 * w * (gc * gc + ac);
+  return fc * (M2 * std::abs(v) + 2.0 * M1 * std::abs(dv) * D1 +
+               M * (std::abs(ddv) * D1 * D1 + std::abs(dv) * D2));
+}
+
 }  // namespace
 
 VdwConstants::VdwConstants(const VdwParams& params) : p(params) {
@@ -315,23 +402,39 @@ double vdw_radial_stiffness(const VdwParams& p, double R) {
 
 namespace {
 
-double pair_stiffness(const VdwConstants& k, const Vec3& rv, const Vec3& b1, const Vec3& b2) {
+// The pair's stiffness bounds for the critical step: k_t (translational, eV/nm²) and k_r
+// (rotational, eV/rad²). k_r is the larger of the lever-arm estimate k_t r² and the rotational
+// bound B (rotational_bound); B exceeds k_t r² where crossed segments overlap deeply.
+struct PairStiffness {
+  double kt = 0, kr = 0;
+};
+PairStiffness pair_stiffness(const VdwConstants& k, const Vec3& rv, const Vec3& b1,
+                             const Vec3& b2) {
   const VdwParams& p = k.p;
   const double R = rv.norm();
-  if (!(R < p.cutoff())) return 0.0;
+  if (!(R < p.cutoff())) return {};
+  const double r2 = p.radius * p.radius;
+  const double c = b1.dot(b2);
   const double side = radial_bound(k, R, 1.0);
-  if (R * R < kCoincident2) return side;
+  if (R * R < kCoincident2) return {side, std::max(side * r2, rotational_bound(k, R, c, 0, 0))};
   const Vec3 n = rv / R;
+  const double p1 = b1.dot(n), p2 = b2.dot(n);
   double delta, dd;
-  delta_of_u(k, cos_theta2(k, b1.dot(b2), b1.dot(n), b2.dot(n)).u, delta, dd);
-  return std::max(side, radial_bound(k, R, delta));
+  delta_of_u(k, cos_theta2(k, c, p1, p2).u, delta, dd);
+  const double kt = std::max(side, radial_bound(k, R, delta));
+  return {kt, std::max(kt * r2, rotational_bound(k, R, c, p1, p2))};
 }
 
 }  // namespace
 
 double vdw_pair_stiffness(const VdwParams& p, const Vec3& x1, const Vec3& b1, const Vec3& x2,
                           const Vec3& b2) {
-  return pair_stiffness(VdwConstants(p), x2 - x1, b1, b2);
+  return pair_stiffness(VdwConstants(p), x2 - x1, b1, b2).kt;
+}
+
+double vdw_rotational_stiffness(const VdwParams& p, const Vec3& x1, const Vec3& b1, const Vec3& x2,
+                                const Vec3& b2) {
+  return pair_stiffness(VdwConstants(p), x2 - x1, b1, b2).kr;
 }
 
 double vdw_separation(const VdwConstants& k, const Vec3& r, const Vec3& b1, const Vec3& b2) {
@@ -447,11 +550,10 @@ bool VdwKernel::pair(const Elements&, std::size_t i, std::size_t j, const Vec3& 
 
 void VdwKernel::stiffness(const Elements& el, std::size_t i, std::size_t j, const Vec3& d,
                           StiffnessSums& s) const {
-  const double kt = pair_stiffness(k_, d, axis_of(el.q[i]), axis_of(el.q[j]));
-  if (kt <= 0.0) return;
-  // Rotational estimate: the contact acts at a lever arm of about one radius from each centre.
-  const double r = p_.radius;
-  s.add_pair(i, j, kt, kt * r * r, kt * r);
+  const PairStiffness k = pair_stiffness(k_, d, axis_of(el.q[i]), axis_of(el.q[j]));
+  if (k.kt <= 0.0) return;
+  // Translation-rotation coupling: the contact's force at a lever arm of about one radius.
+  s.add_pair(i, j, k.kt, k.kr, k.kt * p_.radius);
 }
 
 template class PairModel<VdwKernel>;

@@ -74,6 +74,13 @@ double vdw_radial_stiffness(const VdwParams& p, double R);
 // than a side-by-side one. Zero beyond the cutoff.
 double vdw_pair_stiffness(const VdwParams& p, const Vec3& x1, const Vec3& b1, const Vec3& x2,
                           const Vec3& b2);
+// Rotational stiffness bound of one pair (eV/rad²), for the critical step: at least the spectral
+// norm of each 3×3 rotational block of the pair energy's Hessian (one segment's, and the coupling
+// of the two segments' rotations), from the derivatives of c = b1·b2, cos²θ, δ(θ), D and M along
+// a rotation (the derivation is at rotational_bound in anisotropic_vdw.cpp); never below the
+// lever-arm estimate vdw_pair_stiffness · radius². Zero beyond the cutoff.
+double vdw_rotational_stiffness(const VdwParams& p, const Vec3& x1, const Vec3& b1, const Vec3& x2,
+                                const Vec3& b2);
 
 // Constants derived once from a parameter set (δ as a polynomial in cos 2θ, V and V' at d_min,
 // W below the knee), so the pair kernel needs no pow() or trigonometry.
