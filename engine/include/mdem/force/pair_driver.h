@@ -39,6 +39,7 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "mdem/force/force_model.h"
 #include "mdem/neighbor/neighbor_list.h"
@@ -102,6 +103,32 @@ inline Vec3* torque_buffer(ForceSink& sink, int tid) {
   return K::kDissipative ? sink.damping_torque(tid) : sink.torque(tid);
 }
 
+// Thread tid's rows [first, second) of a list with row offsets `off`: contiguous, so each thread
+// works on its part of the scene (its f_j, t_j mostly its own cache lines), and cut where the
+// listed pairs (plus a quarter pair per row, the row's own cost) split evenly, so the threads
+// finish together (64-row chunks dealt round robin left the busier thread 4 % more instructions
+// on the dense film). Depends on the list and the team size only: the sums stay deterministic.
+inline std::pair<long, long> balanced_rows(const std::vector<std::uint32_t>& off, int tid,
+                                           int threads) {
+  const long n = static_cast<long>(off.size()) - 1;
+  const auto cost = [&](long i) { return 4 * static_cast<std::uint64_t>(off[i]) + i; };
+  const auto cut = [&](int t) -> long {
+    if (t <= 0) return 0;
+    if (t >= threads) return n;
+    const std::uint64_t target = cost(n) * static_cast<std::uint64_t>(t) / threads;
+    long lo = 0, hi = n;  // the first row i with cost(i) >= target
+    while (lo < hi) {
+      const long mid = lo + (hi - lo) / 2;
+      if (cost(mid) < target)
+        lo = mid + 1;
+      else
+        hi = mid;
+    }
+    return lo;
+  };
+  return {cut(tid), cut(tid + 1)};
+}
+
 // flatten: the kernel's pair() inlines into the loop (GCC would otherwise call it per pair and
 // pass the result through memory: 8 % more instructions on the twisted rope than the old
 // hand-written loops; flattened, 3.5 % fewer).
@@ -121,8 +148,8 @@ template <bool kPeriodic, bool kFilter, class K>
     Vec3* __restrict f = force_buffer<K>(sink, tid);
     Vec3* __restrict t = torque_buffer<K>(sink, tid);
     double energy = 0.0;
-#pragma omp for schedule(static, 64)
-    for (long i = 0; i < n; ++i) {
+    const auto [first, last] = balanced_rows(off, tid, omp_get_num_threads());
+    for (long i = first; i < last; ++i) {
       const std::uint32_t begin = off[i], end = off[i + 1];
       if (begin == end) continue;
       const Vec3 xi = el.x[i];
@@ -197,8 +224,8 @@ void run_batched(const K& k, const Elements& el, const NeighborList& list, Force
       b.n = 0;
     };
     const std::uint32_t listed = static_cast<std::uint32_t>(nb.size());
-#pragma omp for schedule(static, 64)
-    for (long i = 0; i < n; ++i) {
+    const auto [first, last] = balanced_rows(off, tid, omp_get_num_threads());
+    for (long i = first; i < last; ++i) {
       const std::uint32_t begin = off[i], end = off[i + 1];
       const Vec3 xi = el.x[i];
       for (std::uint32_t m = begin; m < end; ++m) {
