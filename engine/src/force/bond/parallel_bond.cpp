@@ -20,6 +20,56 @@ void require_stiffness(double v, const char* field) {
                                 " must be finite and >= 0, got " + std::to_string(v));
 }
 
+// The bond's arithmetic is written on plain doubles (P3 below), not on Eigen's 3-vectors: Eigen
+// packs two of a vector's three components into one SSE register and moves the third alone, and
+// in this long chain of small products the compiler spilled such halves to the stack and read
+// them back whole, a store-forwarding stall per quaternion rotation (perf: a quarter of the
+// kinematics' time). Same formulas, same order of the bonds: results differ at round-off only.
+struct P3 {
+  double x, y, z;
+};
+inline P3 p3(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
+inline P3 operator+(const P3& a, const P3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline P3 operator-(const P3& a, const P3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline P3 operator*(double s, const P3& a) { return {s * a.x, s * a.y, s * a.z}; }
+inline double dot(const P3& a, const P3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline P3 cross(const P3& a, const P3& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+
+// The rotation matrix of a unit quaternion, applied to two body-frame vectors: one matrix for
+// both (the bond point arm and the bond direction), no trigonometric call.
+struct Rot {
+  double m[3][3];
+  explicit Rot(const Quat& q) {
+    const double w = q.w(), x = q.x(), y = q.y(), z = q.z();
+    const double tx = 2 * x, ty = 2 * y, tz = 2 * z;
+    const double twx = tx * w, twy = ty * w, twz = tz * w, txx = tx * x, txy = ty * x, txz = tz * x,
+                 tyy = ty * y, tyz = tz * y, tzz = tz * z;
+    m[0][0] = 1 - (tyy + tzz);
+    m[0][1] = txy - twz;
+    m[0][2] = txz + twy;
+    m[1][0] = txy + twz;
+    m[1][1] = 1 - (txx + tzz);
+    m[1][2] = tyz - twx;
+    m[2][0] = txz - twy;
+    m[2][1] = tyz + twx;
+    m[2][2] = 1 - (txx + tyy);
+  }
+  P3 operator*(const Vec3& v) const {
+    return {m[0][0] * v.x() + m[0][1] * v.y() + m[0][2] * v.z(),
+            m[1][0] * v.x() + m[1][1] * v.y() + m[1][2] * v.z(),
+            m[2][0] * v.x() + m[2][1] * v.y() + m[2][2] * v.z()};
+  }
+};
+
+// A quaternion as its scalar and vector parts.
+struct Q4 {
+  double w;
+  P3 v;
+};
+inline Q4 q4(const Quat& q) { return {q.w(), {q.x(), q.y(), q.z()}}; }
+
 // The rotation vector θ of a quaternion (the shortest rotation, |θ| in [0, π]) and the
 // coefficient c of K² in the inverse left Jacobian of SO(3), Jl⁻¹(θ) = I − ½K + cK² (K = [θ]×,
 // c = 1/a² − (1 + cos a)/(2a sin a), a = |θ|), from one quaternion formula: with w = cos(a/2),
@@ -28,27 +78,25 @@ void require_stiffness(double v, const char* field) {
 // series in t² and a², without a square root or trigonometric call, to full double precision
 // (the first omitted terms are below 1e-18 relative); beyond, one sqrt and one atan2.
 struct RotationLog {
-  Vec3 theta;
+  P3 theta;
   double c;
 };
 
-RotationLog rotation_log(const Quat& q) {
-  double w = q.w();
-  Vec3 v = q.vec();
-  if (w < 0) {  // shortest rotation
-    w = -w;
-    v = -v;
-  }
-  const double s2 = v.squaredNorm();
+RotationLog rotation_log(Q4 q) {
+  if (q.w < 0) q = {-q.w, -1.0 * q.v};  // shortest rotation
+  const double w = q.w;
+  const P3& v = q.v;
+  const double s2 = dot(v, v);
   RotationLog r;
   if (s2 < 0.0025 * w * w) {
     // atan(t)/t = Σ (−u)^k/(2k+1), u = t²; then a/s = 2 atan(t)/(t w), a² = 4 u (atan(t)/t)².
-    const double u = s2 / (w * w);
+    const double iw = 1.0 / w;
+    const double u = s2 * iw * iw;
     const double p =
         1.0 +
         u * (-1.0 / 3 +
              u * (1.0 / 5 + u * (-1.0 / 7 + u * (1.0 / 9 + u * (-1.0 / 11 + u * (1.0 / 13))))));
-    r.theta = (2.0 * p / w) * v;
+    r.theta = (2.0 * p * iw) * v;
     const double a2 = 4.0 * u * p * p;
     // 1/a² − cot(a/2)/(2a), from cot's Laurent series.
     r.c = 1.0 / 12 +
@@ -64,23 +112,24 @@ RotationLog rotation_log(const Quat& q) {
 
 // The current bond geometry shared by bond_deformation and bond_eval.
 struct Kinematics {
-  Vec3 ai, aj;      // world centre -> bond point arms
-  Vec3 ui, uj;      // world bond directions of the two bodies
+  P3 ai, aj;        // world centre -> bond point arms
+  P3 ui, uj;        // world bond directions of the two bodies
   double inv_m;     // 1 / |ui + uj| (0 at a 180° bend, where n falls back to ui)
-  Vec3 n;           // (ui + uj) / |ui + uj|
-  Vec3 g;           // gap between the two bond points
+  P3 n;             // (ui + uj) / |ui + uj|
+  P3 g;             // gap between the two bond points
   RotationLog rot;  // rotation vector of R_j R_rel0⁻¹ R_iᵀ and its Jacobian coefficient
 };
 
 Kinematics kinematics(const Bond& b, const Vec3& xi, const Quat& qi, const Vec3& xj,
                       const Quat& qj) {
   Kinematics k;
-  k.ai = qi * b.ci;
-  k.aj = qj * b.cj;
-  k.ui = qi * b.ni;
-  k.uj = qj * b.nj;
-  const Vec3 m = k.ui + k.uj;
-  const double m2 = m.squaredNorm();
+  const Rot Ri(qi), Rj(qj);
+  k.ai = Ri * b.ci;
+  k.aj = Rj * b.cj;
+  k.ui = Ri * b.ni;
+  k.uj = Rj * b.nj;
+  const P3 m = k.ui + k.uj;
+  const double m2 = dot(m, m);
   // |m| = 0 only when the two bond directions are exactly opposite (a 180° bend); fall back to
   // body i's direction there so the result stays finite.
   if (m2 > 1e-24) {
@@ -90,10 +139,76 @@ Kinematics kinematics(const Bond& b, const Vec3& xi, const Quat& qi, const Vec3&
     k.inv_m = 0;
     k.n = k.ui;
   }
-  k.g = (xj + k.aj) - (xi + k.ai);
-  // Conjugates: unit quaternions, and the log is scale invariant anyway.
-  k.rot = rotation_log(qj * b.q_rel0.conjugate() * qi.conjugate());
+  k.g = (p3(xj) + k.aj) - (p3(xi) + k.ai);
+  // Conjugates: unit quaternions, and the log is scale invariant anyway. Eigen's product, whose
+  // rounding a small relative rotation (a difference of O(1) products) inherits: 1e-9 rad comes
+  // out to ~1e-7 relative by any order of the sums, and the textbook reference uses this one.
+  k.rot = rotation_log(q4(qj * b.q_rel0.conjugate() * qi.conjugate()));
   return k;
+}
+
+// Energies, and the forces and moments on i (fi, ti) and j (fj = −fi, tj) of a bond in state k.
+struct Loads {
+  double e_tension, e_shear, e_bending, e_torsion;
+  P3 fi, ti, tj;
+};
+
+// Gradient of U(g, n, θ) (see the header) and its chain rule to both bodies. Rotations are
+// world-frame perturbations R → exp(δφ) R, torque τ = −∂U/∂δφ.
+//   gap:   δg = δx_j + δφ_j×a_j − δx_i − δφ_i×a_i  ⇒ F_j = −G, F_i = G, τ_j = −a_j×G, τ_i = a_i×G
+//   axis:  δu = δφ×u, ∂U/∂m = (I − n nᵀ) ∂U/∂n / |m|  ⇒ τ_{i,j} = −u_{i,j} × ∂U/∂m
+//   rot.:  D = R_j R0⁻¹ R_iᵀ; exp(δφ_j) D ⇒ δθ = J_l⁻¹(θ) δφ_j; D exp(−δφ_i) ⇒ δθ = −J_l⁻ᵀ(θ) δφ_i
+//          ⇒ τ_j = −J_l⁻ᵀ ∂U/∂θ, τ_i = +J_l⁻¹ ∂U/∂θ, with J_l⁻¹ y = y − ½ θ×y + c θ×(θ×y) and
+//          J_l⁻ᵀ y = y + ½ θ×y + c θ×(θ×y) (K is skew, K² symmetric): no matrix is formed.
+inline Loads loads(const BondStiffness& s, const Kinematics& k) {
+  const P3& n = k.n;
+  const P3& g = k.g;
+  const P3& th = k.rot.theta;
+
+  const double gn = dot(g, n);
+  const P3 gs = g - gn * n;
+  const double tn = dot(th, n);
+  const P3 tb = th - tn * n;
+
+  Loads r;
+  r.e_tension = 0.5 * s.kn_area * gn * gn;
+  r.e_shear = 0.5 * s.ks_area * dot(gs, gs);
+  r.e_bending = 0.5 * s.kn_inertia * dot(tb, tb);
+  r.e_torsion = 0.5 * s.ks_polar * tn * tn;
+
+  const double kg = (s.kn_area - s.ks_area) * gn;
+  const double kt = (s.ks_polar - s.kn_inertia) * tn;
+  const P3 dU_dg = s.ks_area * g + kg * n;
+  const P3 dU_dth = s.kn_inertia * th + kt * n;
+  const P3 dU_dn = kg * g + kt * th;
+
+  r.fi = dU_dg;
+  r.ti = cross(k.ai, dU_dg);
+  r.tj = cross(dU_dg, k.aj);
+
+  if (k.inv_m > 0) {
+    const P3 dU_dm = k.inv_m * (dU_dn - dot(n, dU_dn) * n);
+    r.ti = r.ti - cross(k.ui, dU_dm);
+    r.tj = r.tj - cross(k.uj, dU_dm);
+  }
+
+  const P3 p = cross(th, dU_dth);
+  const P3 sym = dU_dth + k.rot.c * cross(th, p);
+  r.ti = r.ti + (sym - 0.5 * p);
+  r.tj = r.tj - (sym + 0.5 * p);
+  return r;
+}
+
+inline Vec3 vec3(const P3& a) { return {a.x, a.y, a.z}; }
+inline void add_to(Vec3& a, const P3& b) {
+  a.x() += b.x;
+  a.y() += b.y;
+  a.z() += b.z;
+}
+inline void subtract_from(Vec3& a, const P3& b) {
+  a.x() -= b.x;
+  a.y() -= b.y;
+  a.z() -= b.z;
 }
 
 }  // namespace
@@ -152,61 +267,26 @@ BondDeformation bond_deformation(const Bond& b, const Vec3& xi, const Quat& qi, 
                                  const Quat& qj) {
   const Kinematics k = kinematics(b, xi, qi, xj, qj);
   BondDeformation d;
-  d.n = k.n;
-  d.u_n = k.g.dot(k.n);
-  d.u_s = k.g - d.u_n * k.n;
-  d.theta_t = k.rot.theta.dot(k.n);
-  d.theta_b = k.rot.theta - d.theta_t * k.n;
+  d.n = vec3(k.n);
+  d.u_n = dot(k.g, k.n);
+  d.u_s = vec3(k.g - d.u_n * k.n);
+  d.theta_t = dot(k.rot.theta, k.n);
+  d.theta_b = vec3(k.rot.theta - d.theta_t * k.n);
   return d;
 }
 
-// Gradient of U(g, n, θ) (see the header) and its chain rule to both bodies. Rotations are
-// world-frame perturbations R → exp(δφ) R, torque τ = −∂U/∂δφ.
-//   gap:   δg = δx_j + δφ_j×a_j − δx_i − δφ_i×a_i  ⇒ F_j = −G, F_i = G, τ_j = −a_j×G, τ_i = a_i×G
-//   axis:  δu = δφ×u, ∂U/∂m = (I − n nᵀ) ∂U/∂n / |m|  ⇒ τ_{i,j} = −u_{i,j} × ∂U/∂m
-//   rot.:  D = R_j R0⁻¹ R_iᵀ; exp(δφ_j) D ⇒ δθ = J_l⁻¹(θ) δφ_j; D exp(−δφ_i) ⇒ δθ = −J_l⁻ᵀ(θ) δφ_i
-//          ⇒ τ_j = −J_l⁻ᵀ ∂U/∂θ, τ_i = +J_l⁻¹ ∂U/∂θ, with J_l⁻¹ y = y − ½ θ×y + c θ×(θ×y) and
-//          J_l⁻ᵀ y = y + ½ θ×y + c θ×(θ×y) (K is skew, K² symmetric): no matrix is formed.
 BondResult bond_eval(const Bond& b, const Vec3& xi, const Quat& qi, const Vec3& xj,
                      const Quat& qj) {
-  const Kinematics k = kinematics(b, xi, qi, xj, qj);
-  const BondStiffness& s = b.k;
-  const Vec3& n = k.n;
-  const Vec3& g = k.g;
-  const Vec3& th = k.rot.theta;
-
-  const double gn = g.dot(n);
-  const Vec3 gs = g - gn * n;
-  const double tn = th.dot(n);
-  const Vec3 tb = th - tn * n;
-
+  const Loads l = loads(b.k, kinematics(b, xi, qi, xj, qj));
   BondResult r;
-  r.e_tension = 0.5 * s.kn_area * gn * gn;
-  r.e_shear = 0.5 * s.ks_area * gs.squaredNorm();
-  r.e_bending = 0.5 * s.kn_inertia * tb.squaredNorm();
-  r.e_torsion = 0.5 * s.ks_polar * tn * tn;
-
-  const double kg = (s.kn_area - s.ks_area) * gn;
-  const double kt = (s.ks_polar - s.kn_inertia) * tn;
-  const Vec3 dU_dg = s.ks_area * g + kg * n;
-  const Vec3 dU_dth = s.kn_inertia * th + kt * n;
-  const Vec3 dU_dn = kg * g + kt * th;
-
-  r.fi = dU_dg;
-  r.fj = -dU_dg;
-  r.ti = k.ai.cross(dU_dg);
-  r.tj = -k.aj.cross(dU_dg);
-
-  if (k.inv_m > 0) {
-    const Vec3 dU_dm = k.inv_m * (dU_dn - n.dot(dU_dn) * n);
-    r.ti -= k.ui.cross(dU_dm);
-    r.tj -= k.uj.cross(dU_dm);
-  }
-
-  const Vec3 p = th.cross(dU_dth);
-  const Vec3 sym = dU_dth + k.rot.c * th.cross(p);
-  r.ti += sym - 0.5 * p;
-  r.tj -= sym + 0.5 * p;
+  r.e_tension = l.e_tension;
+  r.e_shear = l.e_shear;
+  r.e_bending = l.e_bending;
+  r.e_torsion = l.e_torsion;
+  r.fi = vec3(l.fi);
+  r.fj = -r.fi;
+  r.ti = vec3(l.ti);
+  r.tj = vec3(l.tj);
   return r;
 }
 
@@ -262,7 +342,15 @@ void ParallelBond::compute(const Elements& el, const NeighborList*, ForceSink& s
 #pragma omp for schedule(static)
     for (std::size_t k = 0; k < nb; ++k) {
       const Bond& b = bonds_[k];
-      tally.apply(bond_eval(b, x[b.i], q[b.i], dom.image(x[b.i], x[b.j]), q[b.j]), b.i, b.j, f, t);
+      const Loads l = loads(b.k, kinematics(b, x[b.i], q[b.i], dom.image(x[b.i], x[b.j]), q[b.j]));
+      add_to(f[b.i], l.fi);
+      subtract_from(f[b.j], l.fi);
+      add_to(t[b.i], l.ti);
+      add_to(t[b.j], l.tj);
+      tally.tension += l.e_tension;
+      tally.shear += l.e_shear;
+      tally.bending += l.e_bending;
+      tally.torsion += l.e_torsion;
     }
     tally.add_to(sink.energy(tid));
   }
