@@ -3,6 +3,19 @@
 
 namespace mdem {
 
+namespace {
+// Entry i of the threads' buffers summed in thread order, each entry zeroed as it is read.
+inline Vec3 take_sum(std::vector<std::vector<Vec3>>& buffers, std::size_t i, int nt) {
+  Vec3 sum = buffers[0][i];
+  buffers[0][i].setZero();
+  for (int k = 1; k < nt; ++k) {
+    sum += buffers[k][i];
+    buffers[k][i].setZero();
+  }
+  return sum;
+}
+}  // namespace
+
 void ForceSink::resize(std::size_t n, int n_threads, bool with_damping) {
   force_.assign(n_threads, std::vector<Vec3>(n, Vec3::Zero()));
   torque_.assign(n_threads, std::vector<Vec3>(n, Vec3::Zero()));
@@ -14,9 +27,15 @@ void ForceSink::resize(std::size_t n, int n_threads, bool with_damping) {
     damp_torque_.clear();
   }
   energy_.assign(n_threads, EnergyTally{});
+  zeroed_ = true;
 }
 
 void ForceSink::clear() {
+  for (auto& e : energy_) e = EnergyTally{};
+  if (zeroed_) {
+    zeroed_ = false;  // the models write next
+    return;
+  }
   const int nt = threads();
   const std::size_t n = nt ? force_[0].size() : 0;
   const bool damp = has_damping();
@@ -31,33 +50,23 @@ void ForceSink::clear() {
       }
     }
   }
-  for (auto& e : energy_) e = EnergyTally{};
 }
 
 EnergyTally ForceSink::reduce(std::vector<Vec3>& f, std::vector<Vec3>& t, std::vector<Vec3>& fd,
-                              std::vector<Vec3>& td) const {
+                              std::vector<Vec3>& td) {
   const int nt = threads();
   const std::size_t n = nt ? force_[0].size() : 0;
   const bool damp = has_damping();
 #pragma omp parallel for schedule(static) if (static_cast <long>(n) >= kParallelMinItems)
   for (std::size_t i = 0; i < n; ++i) {
-    Vec3 fi = force_[0][i], ti = torque_[0][i];
-    for (int k = 1; k < nt; ++k) {
-      fi += force_[k][i];
-      ti += torque_[k][i];
-    }
-    f[i] = fi;
-    t[i] = ti;
+    f[i] = take_sum(force_, i, nt);
+    t[i] = take_sum(torque_, i, nt);
     if (damp) {
-      Vec3 a = damp_force_[0][i], b = damp_torque_[0][i];
-      for (int k = 1; k < nt; ++k) {
-        a += damp_force_[k][i];
-        b += damp_torque_[k][i];
-      }
-      fd[i] = a;
-      td[i] = b;
+      fd[i] = take_sum(damp_force_, i, nt);
+      td[i] = take_sum(damp_torque_, i, nt);
     }
   }
+  zeroed_ = true;
   EnergyTally total;
   for (const auto& e : energy_) total += e;
   return total;

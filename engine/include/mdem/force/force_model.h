@@ -36,6 +36,8 @@ class ForceSink {
  public:
   // with_damping: allocate the damping buffers (only when some model is dissipative).
   void resize(std::size_t n_elements, int n_threads, bool with_damping);
+  // Zeroes the buffers (a pass over them only when reduce() did not leave them zero) and the
+  // energies, for the models to write.
   void clear();
   int threads() const { return static_cast<int>(force_.size()); }
   Vec3* force(int thread) { return force_[thread].data(); }
@@ -45,15 +47,18 @@ class ForceSink {
   EnergyTally& energy(int thread) { return energy_[thread]; }
   bool has_damping() const { return !damp_force_.empty(); }
   // Sums all threads in a fixed order into f, t (and fd, td when damping buffers exist),
-  // overwriting them, and returns the summed energy tally.
+  // overwriting them, and returns the summed energy tally. Zeroes each buffer entry as it reads
+  // it (one pass over the buffers, so the next clear() has none to make): a second reduce()
+  // without an evaluation in between returns zero forces.
   EnergyTally reduce(std::vector<Vec3>& f, std::vector<Vec3>& t, std::vector<Vec3>& fd,
-                     std::vector<Vec3>& td) const;
+                     std::vector<Vec3>& td);
   // Bytes its buffers hold (capacities, every thread's).
   std::size_t memory_bytes() const;
 
  private:
   std::vector<std::vector<Vec3>> force_, torque_, damp_force_, damp_torque_;
   std::vector<EnergyTally> energy_;
+  bool zeroed_ = true;  // every buffer entry is zero (after resize or reduce)
 };
 
 // Upper bounds of the stiffness each element sees, for the critical time step (model.md §7).
