@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <memory>
 
@@ -15,6 +16,7 @@
 #include "mdem/force/bond/parallel_bond.h"
 #include "mdem/force/contact/anisotropic_vdw.h"
 #include "mdem/force/damping/viscous_contact_damping.h"
+#include "mdem/job/tensile_job.h"
 #include "mdem/job/twist_job.h"
 #include "mdem/scene/film_builder.h"
 
@@ -102,6 +104,46 @@ void BM_LargestTwistJob(benchmark::State& state) {
   run_and_report(state, job.system(), rss0, 10);
 }
 BENCHMARK(BM_LargestTwistJob)->Arg(0)->Iterations(1)->Unit(benchmark::kSecond);
+
+// 300 % strain (docs/stability.md): `mdem run tensile --side 40 --tubes 30 --segments 20
+// --prerelax 5 --relax 0 --ramp 10 --rate 0.01 --strain 300 --threads 1` (600 segments, the
+// spec's largest strain at its largest rate). The model's bonds never break, so pieces held by
+// both grips are drawn out until a bond's load stiffens its rotation past the step: the run stops
+// (at about 127 % strain at safety 0.6, 269 % at 0.3) with the tensile protocol's explanation.
+// Counters: stopped (1/0), the simulated time and step reached, explained (1: the stop message
+// names the drawn-out bond). Too slow for ctest (tens of seconds on a loaded machine).
+void BM_TensileThreeHundredPercent(benchmark::State& state) {
+  TensileJobSpec spec;
+  spec.film.side = 40;
+  spec.film.tubes = 30;
+  spec.film.segments_per_tube = 20;
+  spec.film.seed = spec.seed = 1;
+  spec.prerelax.max_time = 5;
+  spec.relax_ps = 0;
+  spec.monotonic = {0.01, 10, 3.0};
+  spec.relax_report_ps = {0};
+  spec.test_report_strains = {0, 0.02, 0.1, 0.2};
+  IntegratorSettings set;
+  set.threads = 1;
+  set.safety = static_cast<double>(state.range(0)) / 10.0;
+  for (auto _ : state) {
+    TensileJob job(spec, set);
+    bool stopped = false, explained = false;
+    try {
+      run_job(job, JobCadence{}, JobObserver{});
+    } catch (const NumericalError& e) {
+      stopped = true;
+      explained = std::string(e.what()).find("bonds never break") != std::string::npos;
+      std::fprintf(stderr, "safety %.1f: %s\n", set.safety, e.what());
+    }
+    state.counters["stopped"] = stopped ? 1 : 0;
+    state.counters["explained"] = explained ? 1 : 0;
+    state.counters["t_ps"] = job.system().time();
+    state.counters["steps"] = static_cast<double>(job.system().steps());
+    state.counters["dt_fs"] = job.system().dt() * 1e3;
+  }
+}
+BENCHMARK(BM_TensileThreeHundredPercent)->Arg(6)->Iterations(1)->Unit(benchmark::kSecond);
 
 }  // namespace
 

@@ -8,6 +8,8 @@
 #include <stdexcept>
 
 #include "mdem/core/elements.h"
+#include "mdem/core/units.h"
+#include "mdem/force/bond/parallel_bond.h"
 #include "mdem/integrate/system.h"
 #include "mdem/io/state_io.h"
 #include "mdem/observe/percentile.h"
@@ -202,6 +204,33 @@ std::string TensileProtocol::phase(double t) const {
   if (s >= duration()) return "done";
   const int k = std::min(n, static_cast<int>(std::floor(std::max(s, 0.0) / period())) + 1);
   return "cycle " + std::to_string(k) + "/" + std::to_string(n);
+}
+
+std::string TensileProtocol::explain_runaway(const System& sys, std::size_t i) const {
+  const auto* bonds = sys.find<ParallelBond>();
+  if (!bonds) return {};
+  const Elements& el = sys.elements();
+  const Bond* worst = nullptr;
+  double gap = 0, rest = 0;  // the bond points' separation (0 at rest) and the rest length (nm)
+  for (const Bond& b : bonds->bonds()) {
+    if (b.i != i && b.j != i) continue;
+    const BondDeformation d = bond_deformation(b, el.x[b.i], el.q[b.i], el.x[b.j], el.q[b.j]);
+    const double g = std::hypot(d.u_n, d.u_s.norm());
+    if (g > gap) worst = &b, gap = g, rest = b.ci.norm() + b.cj.norm();
+  }
+  if (!worst || !(gap > rest)) return {};
+  const BondResult r =
+      bond_eval(*worst, el.x[worst->i], el.q[worst->i], el.x[worst->j], el.q[worst->j]);
+  std::ostringstream m;
+  m << "its bond to element " << (worst->i == i ? worst->j : worst->i) << " is drawn out by " << gap
+    << " nm (" << gap / rest << " x its rest length " << rest << " nm) under "
+    << units::to_nN(r.fi.norm()) << " nN at " << 100 * strain(sys.time())
+    << " % strain: the model's bonds never break, so past the film's failure a piece held by "
+       "both grips is stretched far beyond a CNT's failure strain, and the bond's load stiffens "
+       "its rotation (force x lever arm) past the step picked at the test's start. Results past "
+       "the film's failure are outside the model: lower the target strain (or lower safety to "
+       "follow it further)";
+  return m.str();
 }
 
 void TensileProtocol::save_state(StateWriter& w) const {

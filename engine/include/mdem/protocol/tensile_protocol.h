@@ -105,6 +105,11 @@ class TensileProtocol final : public Protocol {
   void apply(System& sys, double t) override;
   // "ramp", "straining" (monotonic); "cycle k/n", then "done" (cyclic).
   std::string phase(double t) const override;
+  // A runaway element one of whose bonds is drawn out past its own rest length: the model's
+  // bonds never break, so past the film's failure a piece held by both grips is stretched far
+  // beyond a CNT's failure strain, and the bond's load stiffens its rotation past the step picked
+  // at the test's start (docs/stability.md, 300 % strain). Empty otherwise.
+  std::string explain_runaway(const System& sys, std::size_t i) const override;
 
   const TensileLoading& loading() const { return loading_; }
 
