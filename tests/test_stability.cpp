@@ -28,6 +28,7 @@
 #include "mdem/force/damping/viscous_contact_damping.h"
 #include "mdem/job/twist_job.h"
 #include "mdem/job_runner.h"
+#include "mdem/protocol/tensile_protocol.h"
 #include "mdem/scene/grain.h"
 #include "mdem/scene/nanoparticle.h"
 #include "mdem/scene/tube_builder.h"
@@ -512,6 +513,31 @@ TEST(Stability, TubesGeneratedCrossingThroughEachOther) {
         "two tubes crossing through each other (shared centre), safety " + fmt(safety) + ", engine",
         r.outcome, r.wall_s);
   }
+}
+
+// 300 % strain (docs/stability.md; the full run is bench_stability's
+// BM_TensileThreeHundredPercent): the tensile protocol explains a runaway element whose bond is
+// drawn out past its rest length (the model's bonds never break), and only then.
+TEST(Stability, TensileStopNamesABondDrawnOutPastItsRestLength) {
+  Elements el;
+  add_straight_tube(el, Vec3::Zero(), Vec3::UnitX(), 3, 0);
+  auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
+  el.x[2] += Vec3(0, 3.0, 0);  // the bond 1-2 drawn out sideways by 3 nm (rest length 1.356 nm)
+  el.x[0] += Vec3(0, 0.5, 0);  // the bond 0-1 sheared by 0.5 nm: within its rest length
+  IntegratorSettings s;
+  s.threads = 1;
+  System sys(std::move(el), s);
+  sys.add(std::move(bonds));
+  TensileLoading l;
+  l.length = 40;
+  l.monotonic = {0.01, 10, 3.0};
+  const TensileProtocol protocol(l);
+  const std::string why = protocol.explain_runaway(sys, 2);
+  EXPECT_TRUE(contains(why, "bond to element 1 is drawn out by")) << why;
+  EXPECT_TRUE(contains(why, "bonds never break")) << why;
+  EXPECT_TRUE(contains(why, "lower the target strain")) << why;
+  EXPECT_EQ(protocol.explain_runaway(sys, 0), "");
+  note("element whose bond is drawn out 3 nm sideways, tensile protocol", why, 0);
 }
 
 // Two tubes on one axis: every segment of one on a segment of the other, and shifted by half a
