@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -16,6 +17,7 @@
 #include "mdem/core/units.h"
 #include "mdem/integrate/system.h"
 #include "mdem/job/tensile_job.h"
+#include "mdem/neighbor/neighbor_list.h"
 #include "mdem/observe/aligned_pairs.h"
 #include "mdem/observe/cycle_analysis.h"
 #include "mdem/observe/fragments.h"
@@ -152,9 +154,11 @@ TEST(AlignedPairs, SegmentsOfOneTubeCountOnlyBeyondTheExclusion) {
   EXPECT_EQ(count_aligned_pairs(near).registry_free, 0);
 }
 
-TEST(AlignedPairs, CellSearchMissesNoPairOfADenseRandomCloud) {
-  // 1500 segments in a 12 nm cube with axes near x (so many pairs are aligned), against the
-  // definition applied to every pair.
+namespace {
+
+// 1500 segments (40 tubes of 40 indices) in a 12 nm cube with axes near x, so many pairs are
+// aligned.
+Elements dense_cloud() {
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(0, 12), tilt(-0.25, 0.25);
   Elements el;
@@ -162,22 +166,84 @@ TEST(AlignedPairs, CellSearchMissesNoPairOfADenseRandomCloud) {
     const Vec3 d = Vec3(1, tilt(rng), tilt(rng)).normalized();
     el.add(cnt_segment(Vec3(u(rng), u(rng), u(rng)), quat_from_axis(d), i % 40, i / 40));
   }
+  return el;
+}
+
+// The definition (10°, 1.8 nm, T/2, exclusion 20) applied to every pair of CNT segments.
+AlignedPairCounts every_pair(const Elements& el) {
   const double cos10 = std::cos(10 * kPi / 180);
-  long thesis = 0, free = 0;
+  AlignedPairCounts n;
   for (std::size_t i = 0; i < el.size(); ++i)
     for (std::size_t j = i + 1; j < el.size(); ++j) {
+      if (el.kind[i] != ElementKind::CntSegment || el.kind[j] != ElementKind::CntSegment) continue;
       if (el.tube[i] == el.tube[j] && std::abs(el.index[i] - el.index[j]) < 20) continue;
       const Vec3 bi = el.axis(i);
       if (std::abs(bi.dot(el.axis(j))) <= cos10) continue;
       const Vec3 r = el.x[j] - el.x[i];
-      thesis += r.norm() < 1.8;
-      free += std::abs(r.dot(bi)) <= 0.5 * kT && (r - r.dot(bi) * bi).norm() < 1.8;
+      n.thesis += r.norm() < 1.8;
+      n.registry_free += std::abs(r.dot(bi)) <= 0.5 * kT && (r - r.dot(bi) * bi).norm() < 1.8;
     }
-  ASSERT_GT(thesis, 100);
-  ASSERT_GT(free, 100);
+  return n;
+}
+
+// A CNT–CNT Verlet list as the vdW model keeps one (cutoff 4T, skin 0.5 nm), with the given
+// intra-tube exclusion.
+NeighborList vdw_like_list(const Elements& el, int exclusion, double cutoff = 4 * kT) {
+  NeighborList list(cutoff, 0.5);
+  list.set_kinds(KindPairs::of(ElementKind::CntSegment, ElementKind::CntSegment));
+  list.set_exclusion([exclusion](const Elements& e, std::size_t i, std::size_t j) {
+    return e.cnt_pair_excluded(i, j, exclusion);
+  });
+  list.build(el);
+  return list;
+}
+
+}  // namespace
+
+TEST(AlignedPairs, CellSearchMissesNoPairOfADenseRandomCloud) {
+  // Against the definition applied to every pair.
+  const Elements el = dense_cloud();
+  const AlignedPairCounts all = every_pair(el);
+  ASSERT_GT(all.thesis, 100);
+  ASSERT_GT(all.registry_free, 100);
   const AlignedPairCounts c = count_aligned_pairs(el);
-  EXPECT_EQ(c.thesis, thesis);
-  EXPECT_EQ(c.registry_free, free);
+  EXPECT_EQ(c.thesis, all.thesis);
+  EXPECT_EQ(c.registry_free, all.registry_free);
+}
+
+TEST(AlignedPairs, KeptListGivesTheDefinitionsCountsOrDeclines) {
+  // The counts over a list the caller keeps (the tensile job's frames: the vdW list) are the
+  // definition's, also after the elements moved within half the skin, with NPs among the
+  // segments, and when the list's own exclusion is narrower than the criteria's.
+  Elements el = dense_cloud();
+  el.add(nanoparticle(Vec3(6, 6, 6)));
+  const AlignedPairCounts all = every_pair(el);
+  ASSERT_GT(all.thesis, 100);
+  for (int exclusion : {20, 0}) {
+    const NeighborList list = vdw_like_list(el, exclusion);
+    Elements moved = el;
+    for (std::size_t i = 0; i < moved.size(); i += 2) moved.x[i] += Vec3(0.12, -0.1, 0.05);
+    for (const Elements* e : {&el, &moved}) {
+      const std::optional<AlignedPairCounts> c = count_aligned_pairs(*e, list);
+      ASSERT_TRUE(c.has_value()) << "exclusion " << exclusion;
+      const AlignedPairCounts want = every_pair(*e);
+      EXPECT_EQ(c->thesis, want.thesis) << "exclusion " << exclusion;
+      EXPECT_EQ(c->registry_free, want.registry_free) << "exclusion " << exclusion;
+    }
+  }
+  // Declines: an element moved beyond half the skin, a list over other elements, a cutoff
+  // shorter than the counts' reach √(1.8² + (T/2)²) = 1.92 nm.
+  const NeighborList list = vdw_like_list(el, 20);
+  Elements far = el;
+  far.x[3] += Vec3(0.3, 0, 0);
+  EXPECT_FALSE(count_aligned_pairs(far, list).has_value());
+  Elements fewer = dense_cloud();
+  EXPECT_FALSE(count_aligned_pairs(fewer, list).has_value());
+  EXPECT_FALSE(count_aligned_pairs(el, vdw_like_list(el, 20, 1.9)).has_value());
+  EXPECT_TRUE(count_aligned_pairs(el, vdw_like_list(el, 20, 1.93)).has_value());
+  AlignedPairCriteria bad;
+  bad.max_distance = std::nan("");
+  expect_invalid([&] { (void)count_aligned_pairs(el, list, bad); }, "max_distance");
 }
 
 TEST(AlignedPairs, StabilisationTime) {

@@ -135,7 +135,17 @@ double bending_share(const System& sys) {
   return all > 0 ? bending_energy(sys) / all : 0.0;
 }
 
-AlignedPairCounts aligned(const System& sys) { return count_aligned_pairs(sys.elements()); }
+// The counts over the CNT–CNT vdW list's candidate pairs (its cutoff 4T ≫ the counts' reach; its
+// exclusion is the counts'), which the last force evaluation left current; a list of their own
+// only when that one cannot serve (not yet built, or stale after the positions moved on).
+AlignedPairCounts aligned(const System& sys) {
+  const AlignedPairCriteria c;
+  const auto* vdw = sys.find<AnisotropicVdw>();
+  const NeighborList* list = vdw ? sys.neighbors(*vdw) : nullptr;
+  if (list && vdw->params().intra_tube_exclusion <= c.exclusion)
+    if (auto n = count_aligned_pairs(sys.elements(), *list, c)) return *n;
+  return count_aligned_pairs(sys.elements(), c);
+}
 
 PoreStats pores(const System& sys, const Window2D* window = nullptr) {
   const ProjectedFrame frame = projected_frame(sys.elements());

@@ -10,41 +10,76 @@
 
 namespace mdem {
 
-AlignedPairCounts count_aligned_pairs(const Elements& el, const AlignedPairCriteria& c,
-                                      const Domain& domain) {
+namespace {
+
+void check_criteria(const AlignedPairCriteria& c) {
   if (!(c.max_angle_deg > 0 && c.max_angle_deg <= 90))
     throw std::invalid_argument("count_aligned_pairs: max_angle_deg must lie in (0, 90]");
   require_positive(c.max_distance, "count_aligned_pairs", "max_distance");
   require_positive(c.half_length, "count_aligned_pairs", "half_length");
   if (c.exclusion < 0)
     throw std::invalid_argument("count_aligned_pairs: exclusion must not be negative");
+}
+
+// Both counts lie within |R| < √(d² + (T/2)²) of segment 1's centre.
+double reach(const AlignedPairCriteria& c) { return std::hypot(c.max_distance, c.half_length); }
+
+// The counts over the listed pairs (i < j) of a list that holds every CNT pair within reach(c);
+// pairs the criteria exclude are skipped here, whatever the list's own exclusion.
+AlignedPairCounts count_listed(const Elements& el, const NeighborList& list,
+                               const AlignedPairCriteria& c) {
   AlignedPairCounts n;
-  if (el.size() < 2) return n;
-  // Both counts lie within |R| < √(d² + (T/2)²) of segment 1's centre.
-  NeighborList list(std::hypot(c.max_distance, c.half_length), 0.0, domain);
-  list.set_kinds(KindPairs::of(ElementKind::CntSegment, ElementKind::CntSegment));
-  const int exclusion = c.exclusion;
-  list.set_exclusion([exclusion](const Elements& e, std::size_t i, std::size_t j) {
-    return e.cnt_pair_excluded(i, j, exclusion);
-  });
-  list.build(el);
+  const Domain& domain = list.domain();
   const double cos_max = std::cos(c.max_angle_deg * std::numbers::pi / 180.0);
   const double d2 = c.max_distance * c.max_distance;
+  const double reach2 = reach(c) * reach(c);
   const auto& off = list.offsets();
   const auto& nb = list.neighbors();
   for (std::size_t i = 0; i + 1 < off.size(); ++i) {
+    if (off[i] == off[i + 1] || el.kind[i] != ElementKind::CntSegment) continue;
     const Vec3 bi = el.axis(i);
     for (std::uint32_t k = off[i]; k < off[i + 1]; ++k) {
       const std::size_t j = nb[k];
-      if (!(std::abs(bi.dot(el.axis(j))) > cos_max)) continue;  // γ ≥ max angle
       const Vec3 r = domain.delta(el.x[i], el.x[j]);
-      if (r.squaredNorm() < d2) ++n.thesis;
+      const double r2 = r.squaredNorm();
+      if (!(r2 < reach2) || el.cnt_pair_excluded(i, j, c.exclusion)) continue;
+      if (!(std::abs(bi.dot(el.axis(j))) > cos_max)) continue;  // γ ≥ max angle
+      if (r2 < d2) ++n.thesis;
       const double axial = r.dot(bi);
       if (std::abs(axial) <= c.half_length && perpendicular(r, bi).squaredNorm() < d2)
         ++n.registry_free;
     }
   }
   return n;
+}
+
+}  // namespace
+
+AlignedPairCounts count_aligned_pairs(const Elements& el, const AlignedPairCriteria& c,
+                                      const Domain& domain) {
+  check_criteria(c);
+  if (el.size() < 2) return {};
+  NeighborList list(reach(c), 0.0, domain);
+  list.set_kinds(KindPairs::of(ElementKind::CntSegment, ElementKind::CntSegment));
+  const int exclusion = c.exclusion;
+  list.set_exclusion([exclusion](const Elements& e, std::size_t i, std::size_t j) {
+    return e.cnt_pair_excluded(i, j, exclusion);
+  });
+  list.build(el);
+  return count_listed(el, list, c);
+}
+
+std::optional<AlignedPairCounts> count_aligned_pairs(const Elements& el,
+                                                     const NeighborList& candidates,
+                                                     const AlignedPairCriteria& c) {
+  check_criteria(c);
+  if (el.size() < 2) return AlignedPairCounts{};
+  const KindPairs kinds = candidates.kinds();
+  if (!(candidates.cutoff() >= reach(c)) ||
+      !kinds.has(ElementKind::CntSegment, ElementKind::CntSegment) ||
+      candidates.needs_rebuild(el) || candidates.offsets().size() != el.size() + 1)
+    return std::nullopt;
+  return count_listed(el, candidates, c);
 }
 
 double stabilisation_time(std::span<const double> t, std::span<const double> count,
