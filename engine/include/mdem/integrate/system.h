@@ -263,7 +263,7 @@ class System {
   ForceSink sink_;
   std::vector<Vec3> fd_, td_;  // damping force / torque (model dampers + local damping)
   std::vector<Vec3> f_prev_, t_prev_, fext_prev_, text_prev_;  // for work bookkeeping
-  std::vector<std::array<double, 4>> partial_sums_;  // per thread, for sums in a fixed order
+  std::vector<std::array<double, 6>> partial_sums_;  // per thread, for sums in a fixed order
   EnergyLedger ledger_;
   StepTimers timers_;
   double energy_scale_ = 0;  // energy in play, for relative errors
