@@ -211,16 +211,29 @@ void run_batched(const K& k, const Elements& el, const NeighborList& list, Force
     PairBatch b;
     const auto flush = [&] {
       k.batch(el, b);
+      // The pairs of one i are consecutive: their forces on i are summed in registers and added
+      // to f_i, t_i once per run of i.
+      std::uint32_t ci = b.i[0];
+      Vec3 fi = Vec3::Zero(), ti = Vec3::Zero();
       for (int p = 0; p < b.n; ++p) {
+        if (b.i[p] != ci) {
+          f[ci] += fi;
+          if constexpr (K::kTorques) t[ci] += ti;
+          ci = b.i[p];
+          fi.setZero();
+          ti.setZero();
+        }
         const Vec3 fp(b.fx[p], b.fy[p], b.fz[p]);
-        f[b.i[p]] += fp;
+        fi += fp;
         f[b.j[p]] -= fp;
         if constexpr (K::kTorques) {
-          t[b.i[p]] += Vec3(b.t1x[p], b.t1y[p], b.t1z[p]);
+          ti += Vec3(b.t1x[p], b.t1y[p], b.t1z[p]);
           t[b.j[p]] += Vec3(b.t2x[p], b.t2y[p], b.t2z[p]);
         }
         if constexpr (!K::kDissipative) energy += b.energy[p];
       }
+      f[ci] += fi;
+      if constexpr (K::kTorques) t[ci] += ti;
       b.n = 0;
     };
     const std::uint32_t listed = static_cast<std::uint32_t>(nb.size());
