@@ -322,6 +322,59 @@ TEST(Stages, EachStageHasItsDampingAndStopCondition) {
   EXPECT_EQ(alone.system().steps(), relax_steps);
 }
 
+// A job that hands on to a new, larger system after its first stage (as the tensile job does
+// after its pre-relaxation): its work counts both systems' steps and element-steps.
+class RebuildAfterFirst final : public Job {
+ public:
+  RebuildAfterFirst(long first, long second) {
+    sys_ = std::make_unique<System>(make_bundle_system(bundle(8), two_threads(0.0)));
+    SystemStage::Settings a;
+    a.stop = StopCondition::after_steps(first);
+    add_stage(std::make_unique<SystemStage>("small", *this, std::move(a)));
+    SystemStage::Settings b;
+    b.stop = StopCondition::after_steps(second);
+    add_stage(std::make_unique<SystemStage>("large", *this, std::move(b)));
+  }
+  static BundleSpec bundle(int segments) {
+    BundleSpec b = RelaxThenHold::bundle();
+    b.segments = segments;
+    return b;
+  }
+  std::string_view kind() const override { return "rebuild-after-first"; }
+  System& system() override { return *sys_; }
+  double duration() const override { return 0; }
+  std::vector<std::string> columns() const override { return {}; }
+  std::vector<double> observe() override { return {}; }
+  Summary summary() override { return {}; }
+
+ protected:
+  void stage_finished(std::size_t k) override {
+    if (k == 0) sys_ = std::make_unique<System>(make_bundle_system(bundle(12), two_threads(0.0)));
+  }
+
+ private:
+  std::unique_ptr<System> sys_;
+};
+
+TEST(Stages, WorkCountsEverySystemTheJobRan) {
+  RebuildAfterFirst job(30, 50);
+  run_job(job, {1.0, 0.0}, {});
+  // The second system ran its 50 steps from step 0 (a new system), the first its 30.
+  EXPECT_EQ(job.system().steps(), 50);
+  EXPECT_EQ(job.system().elements().size(), 12u);
+  const JobWork w = job.work();
+  EXPECT_EQ(w.steps, 30 + 50);
+  EXPECT_EQ(w.element_steps, 8.0 * 30 + 12.0 * 50);
+  // The timers hold both systems' time: more than the current one's alone.
+  EXPECT_GT(w.timers.total(), job.system().timers().total());
+  // A job that keeps its system counts it once.
+  RelaxThenHold same(0.05, 20000, 400);
+  run_job(same, {1.0, 0.0}, {});
+  EXPECT_EQ(same.work().steps, same.system().steps());
+  EXPECT_EQ(same.work().element_steps,
+            static_cast<double>(same.system().elements().size()) * same.system().steps());
+}
+
 TEST(Stages, ResumeInsideTheSecondStageIsBitIdentical) {
   RelaxThenHold full(0.05, 20000, 400);
   const JobRunResult rf = run_job(full, {1.0, 0.0}, {});

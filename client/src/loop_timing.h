@@ -11,10 +11,10 @@
 //   terminal            inside the callbacks: progress bar or lines, thermo rows
 //   other               the rest of the loop: stage changes (building a system from a packing),
 //                       the loop's bookkeeping
-// The engine's own split of its steps (System::timers(), engine/include/mdem/integrate/
-// step_timers.h) splits the engine-steps row: pair forces, neighbour search, integration,
-// updaters, and the rest of the row (the frames' observables; a stage's own system, such as the
-// compression's packing, whose timers are not the job system's) as observables.
+// The engine's own split of its steps (System::timers() of every system the job ran, summed by
+// Job::work(); engine/include/mdem/integrate/step_timers.h) splits the engine-steps row: pair
+// forces, neighbour search, integration, updaters, and the rest of the row (the frames'
+// observables, stage starts) as observables.
 #include <array>
 #include <chrono>
 #include <ostream>

@@ -272,8 +272,9 @@ int run_spec_job(const SpecKind& kind, const SpecRunOptions& p, std::ostream& te
     json doc = runner.report(rec.id, outcome, resumed ? resumed->wall_s : 0);
     doc["db"] = store.path();
     const System& sys = job.system();
+    const JobWork work = job.work();
     LoopFigures figures;
-    figures.steps = sys.steps();
+    figures.steps = work.steps;
     figures.elements = static_cast<long>(sys.elements().size());
     figures.threads = sys.threads();
     figures.simulated_ps = sys.time();
@@ -292,7 +293,7 @@ int run_spec_job(const SpecKind& kind, const SpecRunOptions& p, std::ostream& te
     } else {
       print_report(out, err, doc, sys.time());
       out << "\n";
-      print_loop_timing(out, timing, figures, &sys.timers());
+      print_loop_timing(out, timing, figures, &work.timers);
       if (log.enabled()) out << "\nlog: " << log.path().string() << "\n";
     }
     return outcome.state == v1::SUCCEEDED ? kOk : kJobFailed;

@@ -70,12 +70,20 @@ ReportJson accuracy_json(const System& sys, bool with_balance) {
 }
 
 ReportJson performance_json(const System& sys, double wall_s) {
-  const double n = static_cast<double>(sys.elements().size());
+  JobWork work;
+  work.add(sys);
+  return performance_json(sys, work, wall_s);
+}
+
+ReportJson performance_json(const System& sys, const JobWork& work, double wall_s) {
   ReportJson perf;
   perf["wall_s"] = wall_s;
   perf["steps"] = sys.steps();
   perf["threads"] = sys.threads();
-  perf["element_steps_per_s"] = wall_s > 0 ? n * sys.steps() / wall_s : 0.0;
+  // Throughput over every system the job ran (a pre-relaxation's or a packing's too), since the
+  // wall time covers them.
+  perf["element_steps_per_s"] = wall_s > 0 ? work.element_steps / wall_s : 0.0;
+  if (work.steps != sys.steps()) perf["steps_all_systems"] = work.steps;
   // The simulation data's size at the end (System::memory_bytes: capacities, which only grow
   // during a run, so also its peak), for `mdem show` of a local run.
   perf["job_data_bytes"] = sys.memory_bytes();
@@ -95,7 +103,7 @@ ReportJson report(Job& job, const std::string& kind, const SummaryLayout& layout
   if (!reason.empty()) doc["reason"] = reason;
   doc["summary"] = failed ? ReportJson::object() : summary_json(layout, job.summary());
   doc["accuracy"] = accuracy_json(job.system(), !failed);
-  doc["performance"] = performance_json(job.system(), wall_s);
+  doc["performance"] = performance_json(job.system(), job.work(), wall_s);
   return doc;
 }
 

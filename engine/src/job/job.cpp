@@ -59,14 +59,42 @@ void Job::begin_stage() {
   begun_ = true;
 }
 
+void JobWork::add(const JobWork& o) {
+  steps += o.steps;
+  element_steps += o.element_steps;
+  timers.pair_s += o.timers.pair_s;
+  timers.neighbor_s += o.timers.neighbor_s;
+  timers.integrate_s += o.timers.integrate_s;
+  timers.updaters_s += o.timers.updaters_s;
+}
+
+void JobWork::add(const System& sys) {
+  add(JobWork{sys.steps(),
+              static_cast<double>(sys.elements().size()) * static_cast<double>(sys.steps()),
+              sys.timers()});
+}
+
+JobWork Job::work() {
+  JobWork w = left_;
+  w.add(system());
+  return w;
+}
+
 void Job::finish_stage() {
   Stage* st = current_stage();
   if (!st) return;
   finished_steps_ += st->steps_done();
+  // The stage's system, as it ends: kept in left_ if the job goes on with another one (the old
+  // one may be gone once stage_finished has run, so its figures are taken now).
+  const System* before = &st->system();
+  JobWork ending;
+  ending.add(*before);
   stage_finished(index_);
   ++index_;
   begun_ = false;
-  if (Stage* next = current_stage()) next->install();
+  Stage* next = current_stage();
+  if (next) next->install();
+  if (&(next ? next->system() : system()) != before) left_.add(ending);
 }
 
 void Job::save_state(StateWriter& w) const {

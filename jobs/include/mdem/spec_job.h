@@ -53,6 +53,9 @@ std::unique_ptr<Job> make_spec_job(const v1::JobSpec& spec, int threads,
 ReportJson summary_json(const Summary& s);
 ReportJson accuracy_json(const System& sys, bool with_balance);
 ReportJson performance_json(const System& sys, double wall_s);
+// element_steps_per_s over `work` (every system the job ran); steps, threads and data size are
+// the current system's, and steps_all_systems is added when the job ran more than one.
+ReportJson performance_json(const System& sys, const JobWork& work, double wall_s);
 ReportJson job_report(Job& job, const std::string& job_id, JobState state,
                       const std::string& reason, double wall_s);
 // The same for a job of `kind` (its name and summary layout), which need not be in job_kinds().

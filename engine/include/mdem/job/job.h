@@ -19,6 +19,19 @@
 
 namespace mdem {
 
+// What a job's systems did, summed over every system it has run since it was built or loaded: a
+// stage may hand on to a new system (the tensile job rebuilds its film's after the
+// pre-relaxation, the compression job builds its own from the packing stage's), and the steps
+// and engine timers of the systems it left would otherwise drop out of throughput figures. Not
+// checkpointed: after a resume it counts from the resumption, as System::timers() do.
+struct JobWork {
+  long steps = 0;            // steps of all the systems
+  double element_steps = 0;  // sum over the systems of elements x steps
+  StepTimers timers;         // the systems' engine timers, added up
+  void add(const JobWork& other);
+  void add(const System& sys);  // its steps, elements x steps and timers
+};
+
 // A job's key figures, in order: numbers or labels.
 using SummaryValue = std::variant<double, long, std::string>;
 using Summary = std::vector<std::pair<std::string, SummaryValue>>;
@@ -57,6 +70,8 @@ class Job {
   // the current stage's.
   long overall_step() const;
   Stage* current_stage() const { return index_ < stages_.size() ? stages_[index_].get() : nullptr; }
+  // The work of every system the job has run (the ones it has left, then its current one).
+  JobWork work();
 
   // Checkpoints: the stage index, what the finished stages handed on, the current stage's state
   // (its system, protocol and observers) and the job's listed parts, so that a job built anew
@@ -89,6 +104,7 @@ class Job {
   std::size_t index_ = 0;
   bool begun_ = false;
   long finished_steps_ = 0;
+  JobWork left_;  // the systems the job has left behind (finish_stage)
 };
 
 // A job's checkpoint as bytes: header (format and version), the job's kind, then its state.
