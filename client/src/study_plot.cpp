@@ -97,7 +97,8 @@ StudyPlotInfo render_study_plot(const StudyTable& t, const std::string& out_path
       info.left_out.push_back(e.field.label);
       continue;
     }
-    std::string title = e.field.label + " (reference " + num(e.reference).substr(0, 10) +
+    std::string title = e.field.label + " (reference " +
+                        num(e.reference * e.field.scale).substr(0, 10) +
                         (e.field.unit.empty() ? "" : " " + e.field.unit) +
                         (e.extrapolated ? ", extrapolated" : "") + ")";
     if (std::isfinite(e.order)) {
