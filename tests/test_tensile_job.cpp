@@ -371,6 +371,32 @@ TEST(TensileJob, StepIsPickedAnewAfterEachPreRelaxation) {
   expect_resume_identical(spec, "tensile", 2);
 }
 
+TEST(TensileJob, AutoStepKeepsTheOuterStepWithinTheSlowForcesLimit) {
+  // With multiple time stepping the job's auto step keeps respa_k·dt within safety × the slow
+  // forces' (vdW, dashpots) critical step. Before, only the inner step was picked, and a
+  // 100 nm film at respa_k = 4 stopped on the run guard after its pre-relaxation ("the outer step
+  // respa_k x dt is above the slow forces' safe limit"). On a film with crossings in contact
+  // (the 16-tube film above) the cap binds at respa_k = 4.
+  TensileJobSpec spec = tiny_spec();
+  spec.film.tubes = 16;
+  spec.film.segments_per_tube = 40;
+  spec.seed = 21;
+  IntegratorSettings is = one_thread();
+  is.respa_k = 4;
+  TensileJob job(spec, is);
+  run(job);
+  const System& sys = job.system();
+  const double outer_limit = sys.settings().safety * sys.critical_outer_dt();
+  ASSERT_TRUE(std::isfinite(outer_limit));
+  std::printf(
+      "dt %.2f fs, inner safe limit %.2f fs, slow forces' safe outer limit %.2f fs, "
+      "balance error %.3g\n",
+      1e3 * sys.dt(), 1e3 * sys.max_safe_dt(), 1e3 * outer_limit, sys.energy_balance_error());
+  EXPECT_LE(4 * sys.dt(), 0.9 * outer_limit * (1 + 1e-12));
+  EXPECT_LT(sys.dt(), 0.9 * sys.max_safe_dt());  // the cap, not the inner limit, set the step
+  EXPECT_NEAR(num(job.summary(), "final_strain"), spec.monotonic.target_strain, 1e-4);
+}
+
 TEST(TensileJob, CheckpointOfAnotherJobOrTruncatedIsRefused) {
   TensileJobSpec s = tiny_spec();
   std::string bytes;

@@ -601,7 +601,13 @@ double TensileJob::pick_dt(const Elements& el, const ParallelBond* rest) const {
   probe_settings.dt.reset();
   const auto probe = tensile_film_system(el, probe_settings, spec_.dashpot_ratio, rest);
   probe->initialize();
-  return kAutoDtFactor * probe->dt();
+  // With multiple time stepping the outer step respa_k·dt must also stay within safety × the
+  // slow forces' own critical step (System::initialize refuses a given dt beyond it; the job
+  // picks its step itself, so it keeps to both limits rather than stop mid-run on the guard).
+  double dt = probe->dt();
+  if (settings_.respa_k > 1)
+    dt = std::min(dt, settings_.safety * probe->critical_outer_dt() / settings_.respa_k);
+  return kAutoDtFactor * dt;
 }
 
 void TensileJob::rebuild(Elements el, double dt, const ParallelBond* rest) {

@@ -203,7 +203,8 @@ class TensileJob final : public Job {
   void stage_finished(std::size_t k) override;
   void build(Elements el);  // the system from the film, then the stages
   // The step for a system on `el` (bonds at rest as in `rest`, or el's own): the caller's fixed
-  // dt, else 0.9 × the auto step of that state.
+  // dt, else 0.9 × the auto step of that state (with respa_k > 1, of the smaller of it and the
+  // slow forces' safe outer step ÷ respa_k).
   double pick_dt(const Elements& el, const ParallelBond* rest) const;
   // sys_ replaced by a new system on `el` at step dt (bonds at rest as in `rest`).
   void rebuild(Elements el, double dt, const ParallelBond* rest);
