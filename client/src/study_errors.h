@@ -3,7 +3,8 @@
 // a reference - Richardson's extrapolation from the three most accurate runs when one setting
 // is varied at a constant refinement ratio and the differences shrink (the observed order from
 // those three runs), else the most accurate run itself (the run with the most element-steps:
-// the smallest step, the slowest loading). Pure numbers: no database, no jobs.
+// the smallest step, the slowest loading; with multiple time stepping, outer steps). Pure
+// numbers: no database, no jobs.
 #include <cstddef>
 #include <map>
 #include <optional>
@@ -29,7 +30,8 @@ struct StudyRun {
   std::vector<double> point;  // the varied values
   bool succeeded = false;
   double wall_s = 0;
-  double element_steps = 0;               // elements x steps: the cost that orders runs by accuracy
+  double element_steps =
+      0;  // elements x steps / respa_k: the resolution that orders runs by accuracy
   double balance_error = 0;               // the run's energy-balance error (NaN: none)
   std::map<std::string, double> results;  // result key -> value
 };

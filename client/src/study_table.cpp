@@ -37,7 +37,12 @@ StudyRun study_run(const StudyRunRecord& rec, const JobRecord& job,
   r.wall_s = number_at(doc, "performance", "wall_s");
   const double steps = number_at(doc, "performance", "steps");
   const double elements = number_at(doc, "summary", "elements");
-  r.element_steps = steps * (std::isfinite(elements) ? elements : 1.0);
+  // With multiple time stepping the slow forces are resolved only every respa_k steps: a run's
+  // accuracy goes with its outer steps (respa_k = 1 and 2 at one dt take the same steps, and
+  // the first is the more accurate).
+  const double respa_k = number_at(parse_or_text(job.spec_json), "run", "respa_k");
+  r.element_steps = steps * (std::isfinite(elements) ? elements : 1.0) /
+                    (std::isfinite(respa_k) && respa_k >= 1 ? respa_k : 1.0);
   r.balance_error = number_at(doc, "accuracy", "energy_balance_error");
   for (const SummaryField& f : results)
     if (const double v = number_at(doc, "summary", f.key.c_str()); std::isfinite(v))
