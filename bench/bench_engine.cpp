@@ -282,11 +282,13 @@ BENCHMARK(BM_DenseFilmVdw)->Apply(one_and_two_threads);
 BENCHMARK(BM_SparseFilmVdw)->Apply(one_and_two_threads);
 
 // The parallel bond alone on the relaxed sparse film (its 396 × 147 bonds deformed by the
-// relaxation): one force evaluation into a thread sink; ns_per_bond per bond evaluated.
+// relaxation): one force evaluation into a thread sink, the scalar reference (evaluation:0)
+// against the SIMD batches (evaluation:1), interleaved in one process; ns_per_bond per bond.
 void BM_SparseFilmBonds(benchmark::State& state) {
   const Elements& el = relaxed_issue13_film(false);
   const int threads = static_cast<int>(state.range(0));
   const auto bonds = make_film(issue13_film(false)).bonds;
+  bonds->set_evaluation(state.range(1) ? BondEvaluation::Batched : BondEvaluation::Scalar);
   time_evaluations(state, *bonds, el, nullptr, threads);
   const double nb = static_cast<double>(bonds->bonds().size());
   state.counters["ns_per_bond"] =
@@ -294,7 +296,11 @@ void BM_SparseFilmBonds(benchmark::State& state) {
                          benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.counters["bonds"] = nb;
 }
-BENCHMARK(BM_SparseFilmBonds)->Apply(one_and_two_threads);
+BENCHMARK(BM_SparseFilmBonds)
+    ->ArgNames({"threads", "evaluation"})
+    ->ArgsProduct({{1, 2}, {0, 1}})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 
 // The twist job's fixed scene: the thesis's 91-tube rope (N = 6, 50 segments, 4550 elements) with
 // bonds, vdW and its dashpots, under the rigid-grip torque ramp at local damping 0.1 — the

@@ -3,11 +3,13 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
 #include <string>
 
+#include "force/bond/bond_simd.h"
 #include "mdem/core/cnt.h"
 
 namespace mdem {
@@ -301,6 +303,7 @@ std::unique_ptr<ParallelBond> ParallelBond::from_topology(const Elements& el, Bo
 }
 
 void ParallelBond::reorder(std::span<const std::uint32_t> old_to_new) {
+  rest_stale_ = true;
   for (Bond& b : bonds_) {
     b.i = old_to_new[b.i];
     b.j = old_to_new[b.j];
@@ -327,8 +330,16 @@ void ParallelBond::reorder(std::span<const std::uint32_t> old_to_new) {
 
 void ParallelBond::compute(const Elements& el, const NeighborList*, ForceSink& sink) const {
   if (bonds_.empty()) return;
+  if (sink.threads() < 1) throw std::logic_error("parallel_bond: force sink has no thread buffers");
+  if (eval_ == BondEvaluation::Scalar)
+    compute_scalar(el, sink);
+  else
+    compute_batched(el, sink);
+}
+
+// Bond by bond: the reference (bond_eval's kinematics and loads).
+void ParallelBond::compute_scalar(const Elements& el, ForceSink& sink) const {
   const int nt = sink.threads();
-  if (nt < 1) throw std::logic_error("parallel_bond: force sink has no thread buffers");
   const std::size_t nb = bonds_.size();
   const Vec3* x = el.x.data();
   const Quat* q = el.q.data();
@@ -355,6 +366,152 @@ void ParallelBond::compute(const Elements& el, const NeighborList*, ForceSink& s
     tally.add_to(sink.energy(tid));
   }
 }
+
+namespace {
+
+// The arrays of bond_simd::Rest in ParallelBond's rest_ (each `stride` doubles long).
+enum RestArray {
+  kCix,
+  kCiy,
+  kCiz,
+  kCjx,
+  kCjy,
+  kCjz,
+  kNix,
+  kNiy,
+  kNiz,
+  kNjx,
+  kNjy,
+  kNjz,
+  kPw,
+  kPx,
+  kPy,
+  kPz,
+  kKnArea,
+  kKsArea,
+  kKnInertia,
+  kKsPolar,
+  kRestArrays
+};
+
+}  // namespace
+
+void ParallelBond::build_rest() const {
+  const std::size_t nb = bonds_.size();
+  const std::size_t stride =
+      (nb + bond_simd::kMaxLanes - 1) / bond_simd::kMaxLanes * bond_simd::kMaxLanes;
+  // Padding lanes: bond 0's elements at rest with zero stiffness (finite, never scattered).
+  rest_index_.assign(2 * stride, 0);
+  rest_.assign(kRestArrays * stride, 0.0);
+  auto at = [&](RestArray a, std::size_t k) -> double& { return rest_[a * stride + k]; };
+  for (std::size_t k = nb; k < stride; ++k) {
+    rest_index_[k] = bonds_[0].i;
+    rest_index_[stride + k] = bonds_[0].j;
+    at(kNix, k) = at(kNjx, k) = at(kPw, k) = 1.0;
+  }
+  for (std::size_t k = 0; k < nb; ++k) {
+    const Bond& b = bonds_[k];
+    rest_index_[k] = b.i;
+    rest_index_[stride + k] = b.j;
+    for (int c = 0; c < 3; ++c) {
+      at(static_cast<RestArray>(kCix + c), k) = b.ci[c];
+      at(static_cast<RestArray>(kCjx + c), k) = b.cj[c];
+      at(static_cast<RestArray>(kNix + c), k) = b.ni[c];
+      at(static_cast<RestArray>(kNjx + c), k) = b.nj[c];
+    }
+    const Quat p = b.q_rel0.conjugate();
+    at(kPw, k) = p.w();
+    at(kPx, k) = p.x();
+    at(kPy, k) = p.y();
+    at(kPz, k) = p.z();
+    at(kKnArea, k) = b.k.kn_area;
+    at(kKsArea, k) = b.k.ks_area;
+    at(kKnInertia, k) = b.k.kn_inertia;
+    at(kKsPolar, k) = b.k.ks_polar;
+  }
+  rest_stale_ = false;
+}
+
+// In chunks of bond_simd::kChunk bonds (the threads take whole chunks, in order): the chunk's
+// loads in SIMD lanes, the lanes the kernel leaves (large rotations, a 180° bend, NaN) by the
+// scalar code, then scattered bond by bond in bond order, energies summed per term in that order.
+void ParallelBond::compute_batched(const Elements& el, ForceSink& sink) const {
+  static_assert(sizeof(Vec3) == 3 * sizeof(double) && sizeof(Quat) == 4 * sizeof(double));
+  if (rest_stale_) build_rest();
+  const int nt = sink.threads();
+  const std::size_t nb = bonds_.size();
+  const std::size_t stride = rest_index_.size() / 2;
+  const Vec3* x = el.x.data();
+  const Quat* q = el.q.data();
+  const Domain& dom = domain();
+
+  bond_simd::Rest r;
+  r.i = rest_index_.data();
+  r.j = rest_index_.data() + stride;
+  auto array = [&](RestArray a) { return rest_.data() + a * stride; };
+  r.cix = array(kCix), r.ciy = array(kCiy), r.ciz = array(kCiz);
+  r.cjx = array(kCjx), r.cjy = array(kCjy), r.cjz = array(kCjz);
+  r.nix = array(kNix), r.niy = array(kNiy), r.niz = array(kNiz);
+  r.njx = array(kNjx), r.njy = array(kNjy), r.njz = array(kNjz);
+  r.pw = array(kPw), r.px = array(kPx), r.py = array(kPy), r.pz = array(kPz);
+  r.kn_area = array(kKnArea), r.ks_area = array(kKsArea);
+  r.kn_inertia = array(kKnInertia), r.ks_polar = array(kKsPolar);
+  bond_simd::Bodies bodies{x[0].data(), q[0].coeffs().data(), dom.any_periodic(), {}, {}};
+  const Vec3 len = dom.length();
+  for (int a = 0; a < 3; ++a)
+    if (dom.periodic(a)) {
+      bodies.length[a] = len[a];
+      bodies.inv_length[a] = 1.0 / len[a];
+    }
+
+  const long chunks = static_cast<long>((nb + bond_simd::kChunk - 1) / bond_simd::kChunk);
+#pragma omp parallel num_threads(nt) if (static_cast <long>(nb) >= kParallelMinItems)
+  {
+    const int tid = omp_get_thread_num();
+    Vec3* f = sink.force(tid);
+    Vec3* t = sink.torque(tid);
+    BondTally tally;
+    bond_simd::Out out;
+#pragma omp for schedule(static)
+    for (long c = 0; c < chunks; ++c) {
+      const std::size_t begin = static_cast<std::size_t>(c) * bond_simd::kChunk;
+      const std::size_t count = std::min(bond_simd::kChunk, nb - begin);
+      const std::size_t lanes =
+          (count + bond_simd::kMaxLanes - 1) / bond_simd::kMaxLanes * bond_simd::kMaxLanes;
+      std::uint64_t scalar = bond_simd::evaluate(r, bodies, begin, lanes, out);
+      scalar &= count == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << count) - 1;
+      for (; scalar; scalar &= scalar - 1) {
+        const int l = std::countr_zero(scalar);
+        const Bond& b = bonds_[begin + l];
+        const Loads s =
+            loads(b.k, kinematics(b, x[b.i], q[b.i], dom.image(x[b.i], x[b.j]), q[b.j]));
+        out.fx[l] = s.fi.x, out.fy[l] = s.fi.y, out.fz[l] = s.fi.z;
+        out.tix[l] = s.ti.x, out.tiy[l] = s.ti.y, out.tiz[l] = s.ti.z;
+        out.tjx[l] = s.tj.x, out.tjy[l] = s.tj.y, out.tjz[l] = s.tj.z;
+        out.e_tension[l] = s.e_tension;
+        out.e_shear[l] = s.e_shear;
+        out.e_bending[l] = s.e_bending;
+        out.e_torsion[l] = s.e_torsion;
+      }
+      const std::int64_t* bi = r.i + begin;
+      const std::int64_t* bj = r.j + begin;
+      for (std::size_t l = 0; l < count; ++l) {
+        const P3 fi{out.fx[l], out.fy[l], out.fz[l]};
+        add_to(f[bi[l]], fi);
+        subtract_from(f[bj[l]], fi);
+        add_to(t[bi[l]], {out.tix[l], out.tiy[l], out.tiz[l]});
+        add_to(t[bj[l]], {out.tjx[l], out.tjy[l], out.tjz[l]});
+        tally.tension += out.e_tension[l];
+        tally.shear += out.e_shear[l];
+        tally.bending += out.e_bending[l];
+        tally.torsion += out.e_torsion[l];
+      }
+    }
+    tally.add_to(sink.energy(tid));
+  }
+}
+
+const char* bond_simd_target() { return bond_simd::target_name(); }
 
 void add_bond_stiffness(const Bond& b, StiffnessSums& s) {
   const BondStiffness& k = b.k;

@@ -85,6 +85,14 @@ struct BondTally {
 // Adds an intact bond's stiffness to the stable-time-step sums of its two elements.
 void add_bond_stiffness(const Bond& b, StiffnessSums& s);
 
+// How ParallelBond::compute evaluates its bonds: in SIMD batches (bond_simd_target()), equal to
+// the scalar code to round-off, not bit for bit; or bond by bond with the scalar code
+// (bond_eval's), the reference.
+enum class BondEvaluation { Batched, Scalar };
+
+// The instruction set the batched bond evaluation runs on, e.g. "AVX3", "AVX2", "EMU128".
+const char* bond_simd_target();
+
 class ParallelBond final : public ForceModel {
  public:
   // The bonds of `type` recorded in el.topology, in their recorded order, each made by make_bond
@@ -93,10 +101,21 @@ class ParallelBond final : public ForceModel {
   // element holds.
   static std::unique_ptr<ParallelBond> from_topology(const Elements& el, BondType type,
                                                      const BondStiffness& k);
+  explicit ParallelBond(BondEvaluation e = BondEvaluation::Batched) : eval_(e) {}
   std::string_view name() const override { return "parallel_bond"; }
-  void add(const Bond& b) { bonds_.push_back(b); }
+  void add(const Bond& b) {
+    bonds_.push_back(b);
+    rest_stale_ = true;
+  }
   const std::vector<Bond>& bonds() const { return bonds_; }
-  std::vector<Bond>& bonds() { return bonds_; }
+  // Mutable access marks the batched evaluation's copy of the rest state stale: it is rebuilt at
+  // the next compute(). Edit bonds through a reference taken after the last compute().
+  std::vector<Bond>& bonds() {
+    rest_stale_ = true;
+    return bonds_;
+  }
+  BondEvaluation evaluation() const { return eval_; }
+  void set_evaluation(BondEvaluation e) { eval_ = e; }
   // Each bond's two element indices follow a reordering, and the bonds are then sorted by their
   // elements' new indices (lower, then higher).
   bool follows_reorder() const override { return true; }
@@ -104,10 +123,23 @@ class ParallelBond final : public ForceModel {
   void compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const override;
   void add_stiffness(const Elements& el, const NeighborList* pairs,
                      StiffnessSums& s) const override;
-  std::size_t memory_bytes() const override { return capacity_bytes(bonds_); }
+  std::size_t memory_bytes() const override {
+    return capacity_bytes(bonds_) + capacity_bytes(rest_index_) + capacity_bytes(rest_);
+  }
 
  private:
+  void compute_scalar(const Elements& el, ForceSink& sink) const;
+  void compute_batched(const Elements& el, ForceSink& sink) const;
+  void build_rest() const;
+
   std::vector<Bond> bonds_;
+  BondEvaluation eval_;
+  // The batched evaluation's structure-of-arrays copy of the bonds' rest state (bond_simd.h's
+  // Rest), padded to whole vectors: element indices i, j, then 20 arrays of doubles. Built from
+  // bonds_ at the first compute() after a change (add, reorder, mutable bonds()).
+  mutable std::vector<std::int64_t> rest_index_;
+  mutable std::vector<double> rest_;
+  mutable bool rest_stale_ = true;
 };
 
 }  // namespace mdem
