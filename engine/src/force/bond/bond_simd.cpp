@@ -37,8 +37,10 @@ HWY_INLINE V dot(const V3& a, const V3& b) { return a.x * b.x + a.y * b.y + a.z 
 HWY_INLINE V3 cross(const V3& a, const V3& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
-HWY_INLINE V3 load3(D d, const double* x, const double* y, const double* z, std::size_t k) {
-  return {hn::LoadU(d, x + k), hn::LoadU(d, y + k), hn::LoadU(d, z + k)};
+// Fields f, f + 1, f + 2 of a vector of bonds (f at base + f·kMaxLanes).
+HWY_INLINE V3 load3(D d, const double* base, int f) {
+  return {hn::LoadU(d, base + f * kMaxLanes), hn::LoadU(d, base + (f + 1) * kMaxLanes),
+          hn::LoadU(d, base + (f + 2) * kMaxLanes)};
 }
 
 // The rotation matrix of a unit quaternion (the scalar Rot's formula).
@@ -97,7 +99,11 @@ HWY_INLINE std::uint64_t lanes(const Rest& r, const Bodies& b, std::size_t k, st
   const DI di;
   const V zero = hn::Zero(d), one = hn::Set(d, 1.0), half = hn::Set(d, 0.5);
 
-  const VI ii = hn::LoadU(di, r.i + k), jj = hn::LoadU(di, r.j + k);
+  const std::size_t block = k / kMaxLanes, lane = k % kMaxLanes;
+  const double* rest = r.field + block * kFields * kMaxLanes + lane;
+  auto field = [&](int f) { return hn::LoadU(d, rest + f * kMaxLanes); };
+  const std::int64_t* index = r.index + 2 * block * kMaxLanes + lane;
+  const VI ii = hn::LoadU(di, index), jj = hn::LoadU(di, index + kMaxLanes);
   const V3 xi = gather_x(d, b.x, ii + hn::ShiftLeft<1>(ii));
   V3 xj = gather_x(d, b.x, jj + hn::ShiftLeft<1>(jj));
   const Q qi = gather_q(d, b.q, hn::ShiftLeft<2>(ii));
@@ -110,16 +116,16 @@ HWY_INLINE std::uint64_t lanes(const Rest& r, const Bodies& b, std::size_t k, st
 
   // Kinematics.
   const M3 Ri(d, qi.w, qi.v.x, qi.v.y, qi.v.z), Rj(d, qj.w, qj.v.x, qj.v.y, qj.v.z);
-  const V3 ai = Ri * load3(d, r.cix, r.ciy, r.ciz, k);
-  const V3 aj = Rj * load3(d, r.cjx, r.cjy, r.cjz, k);
-  const V3 ui = Ri * load3(d, r.nix, r.niy, r.niz, k);
-  const V3 uj = Rj * load3(d, r.njx, r.njy, r.njz, k);
+  const V3 ai = Ri * load3(d, rest, kCix);
+  const V3 aj = Rj * load3(d, rest, kCjx);
+  const V3 ui = Ri * load3(d, rest, kNix);
+  const V3 uj = Rj * load3(d, rest, kNjx);
   const V3 m = ui + uj;
   const V m2 = dot(m, m);
   const V3 g = (xj + aj) - (xi + ai);
 
   // Relative rotation q_j q_rel0⁻¹ q_i⁻¹, the shortest one (w ≥ 0).
-  const Q p = {hn::LoadU(d, r.pw + k), load3(d, r.px, r.py, r.pz, k)};
+  const Q p = {field(kPw), load3(d, rest, kPx)};
   Q rq = mul(mul(qj, p), Q{qi.w, {hn::Neg(qi.v.x), hn::Neg(qi.v.y), hn::Neg(qi.v.z)}});
   const auto flip = hn::Lt(rq.w, zero);
   const V w = hn::IfThenElse(flip, hn::Neg(rq.w), rq.w);
@@ -153,8 +159,8 @@ HWY_INLINE std::uint64_t lanes(const Rest& r, const Bodies& b, std::size_t k, st
   c = hn::MulAdd(a2, c, hn::Set(d, 1.0 / 12));
 
   // Loads (loads() in parallel_bond.cpp).
-  const V kn_a = hn::LoadU(d, r.kn_area + k), ks_a = hn::LoadU(d, r.ks_area + k);
-  const V kn_i = hn::LoadU(d, r.kn_inertia + k), ks_j = hn::LoadU(d, r.ks_polar + k);
+  const V kn_a = field(kKnArea), ks_a = field(kKsArea);
+  const V kn_i = field(kKnInertia), ks_j = field(kKsPolar);
   const V gn = dot(g, n);
   const V3 gs = g - gn * n;
   const V tn = dot(th, n);

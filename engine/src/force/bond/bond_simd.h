@@ -15,16 +15,39 @@ constexpr std::size_t kMaxLanes = 8;
 // Bonds per call of evaluate(): the outputs of one chunk stay in L1 until they are scattered.
 constexpr std::size_t kChunk = 64;
 
-// The bonds' rest state, one entry per bond, every array padded to a multiple of kMaxLanes
-// entries (padding: any valid element indices and finite values). i, j: element indices; c, n:
-// body-frame arms (centre → bond point) and bond directions of bodies i and j; p = q_rel0⁻¹
-// (w, x, y, z); the four stiffnesses of BondStiffness.
+// The bonds' rest state in blocks of kMaxLanes bonds, every field of a block contiguous (a
+// vector's load is one contiguous read, and the bond loop streams through one array): for block
+// b and lane l, field f of bond kMaxLanes·b + l is field[(b·kFields + f)·kMaxLanes + l], its
+// element indices index[(2b + 0)·kMaxLanes + l] (i) and index[(2b + 1)·kMaxLanes + l] (j). The
+// fields: c, n the body-frame arms (centre → bond point) and bond directions of bodies i and j;
+// p = q_rel0⁻¹ (w, x, y, z); the four stiffnesses of BondStiffness. A last partial block is
+// padded with any valid element indices and finite values.
+enum Field {
+  kCix,
+  kCiy,
+  kCiz,
+  kCjx,
+  kCjy,
+  kCjz,
+  kNix,
+  kNiy,
+  kNiz,
+  kNjx,
+  kNjy,
+  kNjz,
+  kPw,
+  kPx,
+  kPy,
+  kPz,
+  kKnArea,
+  kKsArea,
+  kKnInertia,
+  kKsPolar,
+  kFields
+};
 struct Rest {
-  const std::int64_t *i, *j;
-  const double *cix, *ciy, *ciz, *cjx, *cjy, *cjz;
-  const double *nix, *niy, *niz, *njx, *njy, *njz;
-  const double *pw, *px, *py, *pz;
-  const double *kn_area, *ks_area, *kn_inertia, *ks_polar;
+  const std::int64_t* index;
+  const double* field;
 };
 
 // The bodies: x holds 3 doubles per element (Vec3's layout), q 4 (x, y, z, w: Eigen's

@@ -367,67 +367,36 @@ void ParallelBond::compute_scalar(const Elements& el, ForceSink& sink) const {
   }
 }
 
-namespace {
-
-// The arrays of bond_simd::Rest in ParallelBond's rest_ (each `stride` doubles long).
-enum RestArray {
-  kCix,
-  kCiy,
-  kCiz,
-  kCjx,
-  kCjy,
-  kCjz,
-  kNix,
-  kNiy,
-  kNiz,
-  kNjx,
-  kNjy,
-  kNjz,
-  kPw,
-  kPx,
-  kPy,
-  kPz,
-  kKnArea,
-  kKsArea,
-  kKnInertia,
-  kKsPolar,
-  kRestArrays
-};
-
-}  // namespace
-
 void ParallelBond::build_rest() const {
+  using namespace bond_simd;
   const std::size_t nb = bonds_.size();
-  const std::size_t stride =
-      (nb + bond_simd::kMaxLanes - 1) / bond_simd::kMaxLanes * bond_simd::kMaxLanes;
-  // Padding lanes: bond 0's elements at rest with zero stiffness (finite, never scattered).
-  rest_index_.assign(2 * stride, 0);
-  rest_.assign(kRestArrays * stride, 0.0);
-  auto at = [&](RestArray a, std::size_t k) -> double& { return rest_[a * stride + k]; };
-  for (std::size_t k = nb; k < stride; ++k) {
-    rest_index_[k] = bonds_[0].i;
-    rest_index_[stride + k] = bonds_[0].j;
-    at(kNix, k) = at(kNjx, k) = at(kPw, k) = 1.0;
-  }
-  for (std::size_t k = 0; k < nb; ++k) {
-    const Bond& b = bonds_[k];
-    rest_index_[k] = b.i;
-    rest_index_[stride + k] = b.j;
+  const std::size_t blocks = (nb + kMaxLanes - 1) / kMaxLanes;
+  rest_index_.resize(2 * kMaxLanes * blocks);
+  rest_.resize(kFields * kMaxLanes * blocks);
+  for (std::size_t k = 0; k < blocks * kMaxLanes; ++k) {
+    // Padding lanes: bond 0 again with zero stiffness (finite, never scattered).
+    const Bond& b = k < nb ? bonds_[k] : bonds_[0];
+    const std::size_t block = k / kMaxLanes, lane = k % kMaxLanes;
+    rest_index_[2 * block * kMaxLanes + lane] = b.i;
+    rest_index_[(2 * block + 1) * kMaxLanes + lane] = b.j;
+    double* f = rest_.data() + block * kFields * kMaxLanes + lane;
+    auto set = [&](Field field, double v) { f[field * kMaxLanes] = v; };
     for (int c = 0; c < 3; ++c) {
-      at(static_cast<RestArray>(kCix + c), k) = b.ci[c];
-      at(static_cast<RestArray>(kCjx + c), k) = b.cj[c];
-      at(static_cast<RestArray>(kNix + c), k) = b.ni[c];
-      at(static_cast<RestArray>(kNjx + c), k) = b.nj[c];
+      set(static_cast<Field>(kCix + c), b.ci[c]);
+      set(static_cast<Field>(kCjx + c), b.cj[c]);
+      set(static_cast<Field>(kNix + c), b.ni[c]);
+      set(static_cast<Field>(kNjx + c), b.nj[c]);
     }
     const Quat p = b.q_rel0.conjugate();
-    at(kPw, k) = p.w();
-    at(kPx, k) = p.x();
-    at(kPy, k) = p.y();
-    at(kPz, k) = p.z();
-    at(kKnArea, k) = b.k.kn_area;
-    at(kKsArea, k) = b.k.ks_area;
-    at(kKnInertia, k) = b.k.kn_inertia;
-    at(kKsPolar, k) = b.k.ks_polar;
+    set(kPw, p.w());
+    set(kPx, p.x());
+    set(kPy, p.y());
+    set(kPz, p.z());
+    const bool pad = k >= nb;
+    set(kKnArea, pad ? 0.0 : b.k.kn_area);
+    set(kKsArea, pad ? 0.0 : b.k.ks_area);
+    set(kKnInertia, pad ? 0.0 : b.k.kn_inertia);
+    set(kKsPolar, pad ? 0.0 : b.k.ks_polar);
   }
   rest_stale_ = false;
 }
@@ -440,22 +409,10 @@ void ParallelBond::compute_batched(const Elements& el, ForceSink& sink) const {
   if (rest_stale_) build_rest();
   const int nt = sink.threads();
   const std::size_t nb = bonds_.size();
-  const std::size_t stride = rest_index_.size() / 2;
   const Vec3* x = el.x.data();
   const Quat* q = el.q.data();
   const Domain& dom = domain();
-
-  bond_simd::Rest r;
-  r.i = rest_index_.data();
-  r.j = rest_index_.data() + stride;
-  auto array = [&](RestArray a) { return rest_.data() + a * stride; };
-  r.cix = array(kCix), r.ciy = array(kCiy), r.ciz = array(kCiz);
-  r.cjx = array(kCjx), r.cjy = array(kCjy), r.cjz = array(kCjz);
-  r.nix = array(kNix), r.niy = array(kNiy), r.niz = array(kNiz);
-  r.njx = array(kNjx), r.njy = array(kNjy), r.njz = array(kNjz);
-  r.pw = array(kPw), r.px = array(kPx), r.py = array(kPy), r.pz = array(kPz);
-  r.kn_area = array(kKnArea), r.ks_area = array(kKsArea);
-  r.kn_inertia = array(kKnInertia), r.ks_polar = array(kKsPolar);
+  const bond_simd::Rest r{rest_index_.data(), rest_.data()};
   bond_simd::Bodies bodies{x[0].data(), q[0].coeffs().data(), dom.any_periodic(), {}, {}};
   const Vec3 len = dom.length();
   for (int a = 0; a < 3; ++a)
@@ -493,14 +450,14 @@ void ParallelBond::compute_batched(const Elements& el, ForceSink& sink) const {
         out.e_bending[l] = s.e_bending;
         out.e_torsion[l] = s.e_torsion;
       }
-      const std::int64_t* bi = r.i + begin;
-      const std::int64_t* bj = r.j + begin;
       for (std::size_t l = 0; l < count; ++l) {
+        const std::int64_t* ij = r.index + 2 * (begin + l) - l % bond_simd::kMaxLanes;
+        const std::int64_t bi = ij[0], bj = ij[bond_simd::kMaxLanes];
         const P3 fi{out.fx[l], out.fy[l], out.fz[l]};
-        add_to(f[bi[l]], fi);
-        subtract_from(f[bj[l]], fi);
-        add_to(t[bi[l]], {out.tix[l], out.tiy[l], out.tiz[l]});
-        add_to(t[bj[l]], {out.tjx[l], out.tjy[l], out.tjz[l]});
+        add_to(f[bi], fi);
+        subtract_from(f[bj], fi);
+        add_to(t[bi], {out.tix[l], out.tiy[l], out.tiz[l]});
+        add_to(t[bj], {out.tjx[l], out.tjy[l], out.tjz[l]});
         tally.tension += out.e_tension[l];
         tally.shear += out.e_shear[l];
         tally.bending += out.e_bending[l];

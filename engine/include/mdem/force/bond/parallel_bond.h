@@ -134,9 +134,9 @@ class ParallelBond final : public ForceModel {
 
   std::vector<Bond> bonds_;
   BondEvaluation eval_;
-  // The batched evaluation's structure-of-arrays copy of the bonds' rest state (bond_simd.h's
-  // Rest), padded to whole vectors: element indices i, j, then 20 arrays of doubles. Built from
-  // bonds_ at the first compute() after a change (add, reorder, mutable bonds()).
+  // The batched evaluation's copy of the bonds' rest state (bond_simd.h's Rest: blocks of
+  // vector-length structure-of-arrays), built from bonds_ at the first compute() after a change
+  // (add, reorder, mutable bonds()).
   mutable std::vector<std::int64_t> rest_index_;
   mutable std::vector<double> rest_;
   mutable bool rest_stale_ = true;
