@@ -92,9 +92,15 @@ HWY_INLINE void store3(D d, const V3& a, double* x, double* y, double* z, std::s
   hn::StoreU(a.z, d, z + o);
 }
 
-// One vector of bonds at k = begin + o; returns the mask of lanes for the scalar code.
+// Per-lane running sums of the four energies.
+struct Energies {
+  V tension, shear, bending, torsion;
+};
+
+// One vector of bonds at k = begin + o; returns the mask of lanes for the scalar code, and adds
+// the other lanes' energies to e.
 HWY_INLINE std::uint64_t lanes(const Rest& r, const Bodies& b, std::size_t k, std::size_t o,
-                               Out& out) {
+                               Out& out, Energies& e) {
   const D d;
   const DI di;
   const V zero = hn::Zero(d), one = hn::Set(d, 1.0), half = hn::Set(d, 0.5);
@@ -165,10 +171,10 @@ HWY_INLINE std::uint64_t lanes(const Rest& r, const Bodies& b, std::size_t k, st
   const V3 gs = g - gn * n;
   const V tn = dot(th, n);
   const V3 tb = th - tn * n;
-  hn::StoreU(half * kn_a * gn * gn, d, out.e_tension + o);
-  hn::StoreU(half * ks_a * dot(gs, gs), d, out.e_shear + o);
-  hn::StoreU(half * kn_i * dot(tb, tb), d, out.e_bending + o);
-  hn::StoreU(half * ks_j * tn * tn, d, out.e_torsion + o);
+  e.tension = e.tension + hn::IfThenElseZero(ok, half * kn_a * gn * gn);
+  e.shear = e.shear + hn::IfThenElseZero(ok, half * ks_a * dot(gs, gs));
+  e.bending = e.bending + hn::IfThenElseZero(ok, half * kn_i * dot(tb, tb));
+  e.torsion = e.torsion + hn::IfThenElseZero(ok, half * ks_j * tn * tn);
 
   const V kg = (kn_a - ks_a) * gn;
   const V kt = (ks_j - kn_i) * tn;
@@ -192,7 +198,12 @@ HWY_INLINE std::uint64_t lanes(const Rest& r, const Bodies& b, std::size_t k, st
 std::uint64_t Evaluate(const Rest& r, const Bodies& b, std::size_t begin, std::size_t n, Out& out) {
   const D d;
   std::uint64_t scalar = 0;
-  for (std::size_t o = 0; o < n; o += hn::Lanes(d)) scalar |= lanes(r, b, begin + o, o, out);
+  Energies e{hn::Zero(d), hn::Zero(d), hn::Zero(d), hn::Zero(d)};
+  for (std::size_t o = 0; o < n; o += hn::Lanes(d)) scalar |= lanes(r, b, begin + o, o, out, e);
+  out.e_tension = hn::GetLane(hn::SumOfLanes(d, e.tension));
+  out.e_shear = hn::GetLane(hn::SumOfLanes(d, e.shear));
+  out.e_bending = hn::GetLane(hn::SumOfLanes(d, e.bending));
+  out.e_torsion = hn::GetLane(hn::SumOfLanes(d, e.torsion));
   return scalar;
 }
 

@@ -60,18 +60,20 @@ struct Bodies {
   double length[3], inv_length[3];
 };
 
-// One chunk's loads: the force on i (−f on j), the torques on i and j, the four energies.
+// One chunk's loads: the force on i (−f on j) and the torques on i and j per bond, and the four
+// energies summed over the bonds the kernel evaluated (not those it leaves to the scalar code).
 struct alignas(64) Out {
   double fx[kChunk], fy[kChunk], fz[kChunk];
   double tix[kChunk], tiy[kChunk], tiz[kChunk];
   double tjx[kChunk], tjy[kChunk], tjz[kChunk];
-  double e_tension[kChunk], e_shear[kChunk], e_bending[kChunk], e_torsion[kChunk];
+  double e_tension, e_shear, e_bending, e_torsion;
 };
 
-// Evaluates bonds [begin, begin + n) into out[0, n), n ≤ kChunk a multiple of kMaxLanes. Returns
-// the lanes (bit l for bond begin + l) whose outputs are not defined here: a relative rotation
-// outside the series' range, a bond axis of length ≤ 1e-12 (the scalar code's 180° fallback), or
-// a non-finite input; the caller takes those from the scalar code.
+// Evaluates bonds [begin, begin + n) into out (force and torques of bond begin + l at l), n ≤
+// kChunk a multiple of kMaxLanes. Returns the lanes (bit l for bond begin + l) whose outputs are
+// not defined here: a relative rotation outside the series' range, a bond axis of length ≤ 1e-12
+// (the scalar code's 180° fallback), or a NaN in an orientation; the caller takes those from the
+// scalar code. A NaN position propagates to the lane's outputs, as in the scalar code.
 std::uint64_t evaluate(const Rest& r, const Bodies& b, std::size_t begin, std::size_t n, Out& out);
 
 // The instruction set evaluate() runs on this CPU, e.g. "AVX3", "AVX2", "EMU128".

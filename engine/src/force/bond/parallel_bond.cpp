@@ -403,7 +403,9 @@ void ParallelBond::build_rest() const {
 
 // In chunks of bond_simd::kChunk bonds (the threads take whole chunks, in order): the chunk's
 // loads in SIMD lanes, the lanes the kernel leaves (large rotations, a 180° bend, NaN) by the
-// scalar code, then scattered bond by bond in bond order, energies summed per term in that order.
+// scalar code, then scattered bond by bond in bond order. Energies summed per term: the kernel's
+// lanes per lane over the chunk, then the chunk's scalar bonds, chunk after chunk (a fixed order
+// for a given thread count and instruction set).
 void ParallelBond::compute_batched(const Elements& el, ForceSink& sink) const {
   static_assert(sizeof(Vec3) == 3 * sizeof(double) && sizeof(Quat) == 4 * sizeof(double));
   if (rest_stale_) build_rest();
@@ -445,10 +447,10 @@ void ParallelBond::compute_batched(const Elements& el, ForceSink& sink) const {
         out.fx[l] = s.fi.x, out.fy[l] = s.fi.y, out.fz[l] = s.fi.z;
         out.tix[l] = s.ti.x, out.tiy[l] = s.ti.y, out.tiz[l] = s.ti.z;
         out.tjx[l] = s.tj.x, out.tjy[l] = s.tj.y, out.tjz[l] = s.tj.z;
-        out.e_tension[l] = s.e_tension;
-        out.e_shear[l] = s.e_shear;
-        out.e_bending[l] = s.e_bending;
-        out.e_torsion[l] = s.e_torsion;
+        tally.tension += s.e_tension;
+        tally.shear += s.e_shear;
+        tally.bending += s.e_bending;
+        tally.torsion += s.e_torsion;
       }
       for (std::size_t l = 0; l < count; ++l) {
         const std::int64_t* ij = r.index + 2 * (begin + l) - l % bond_simd::kMaxLanes;
@@ -458,11 +460,11 @@ void ParallelBond::compute_batched(const Elements& el, ForceSink& sink) const {
         subtract_from(f[bj], fi);
         add_to(t[bi], {out.tix[l], out.tiy[l], out.tiz[l]});
         add_to(t[bj], {out.tjx[l], out.tjy[l], out.tjz[l]});
-        tally.tension += out.e_tension[l];
-        tally.shear += out.e_shear[l];
-        tally.bending += out.e_bending[l];
-        tally.torsion += out.e_torsion[l];
       }
+      tally.tension += out.e_tension;
+      tally.shear += out.e_shear;
+      tally.bending += out.e_bending;
+      tally.torsion += out.e_torsion;
     }
     tally.add_to(sink.energy(tid));
   }
