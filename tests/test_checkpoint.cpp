@@ -172,6 +172,18 @@ TEST(Checkpoint, ResumedTwistRelaxationRunIsBitIdentical) {
   }
 }
 
+// The clamped hold (positions and spins) under the per-element load: held rotational DOFs at the
+// hold's start, all DOFs freed at the release; resumed in the hold and after the release.
+TEST(Checkpoint, ResumedClampedTwistRelaxationRunIsBitIdentical) {
+  TwistJobSpec s = small_spec(TwistBoundary::TwistRelaxation);
+  s.loading.grip_load = GripLoad::PerElement;
+  s.loading.grip_hold = GripHold::PositionsAndSpins;
+  for (long stop : {110L, 163L}) {
+    SCOPED_TRACE("stop at step " + std::to_string(stop));
+    expect_bit_identical_resume(s, 2, stop);
+  }
+}
+
 // Above kParallelMinItems elements the integrator, sink and neighbour-list loops run threaded;
 // the energy ledger then repeats only because the integrator adds the threads' sums in a fixed
 // order (OpenMP's reduction(+) does not).
@@ -247,6 +259,14 @@ TEST(Checkpoint, CheckpointOfAnotherLoadingIsRefused) {
   other.loading.torque_max = units::nNnm(3.0);
   const std::string m = load_error(checkpoint_after_steps(other, 2), small_spec(), 2);
   EXPECT_NE(m.find("twist loading"), std::string::npos) << m;
+}
+
+TEST(Checkpoint, CheckpointOfAnotherGripHoldIsRefused) {
+  TwistJobSpec clamped = small_spec(TwistBoundary::TwistRelaxation);
+  clamped.loading.grip_hold = GripHold::PositionsAndSpins;
+  const std::string m =
+      load_error(checkpoint_after_steps(small_spec(TwistBoundary::TwistRelaxation), 2), clamped, 2);
+  EXPECT_NE(m.find("grip hold"), std::string::npos) << m;
 }
 
 TEST(Checkpoint, AnotherThreadCountIsRefused) {

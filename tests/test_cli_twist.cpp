@@ -154,6 +154,8 @@ TEST(CliTwist, BadValuesAreRefusedNamingFieldAndRange) {
       {"--snapshot-every", "-1", "outputs.snapshot_every_ps"},
       {"--bc", "fixed", "--bc"},
       {"--grip-load", "both", "--grip-load"},
+      {"--grip-hold", "spins", "--grip-hold"},
+      {"--grip-hold", "positions-and-spins", "twist.grip_hold"},  // needs --bc twist-relaxation
       {"--line-defects", "0:9", "twist.line_defects[0].width"},
       {"--line-defects", "1:2:3:4", "--line-defects"},
       {"--line-defects", "400", "twist.line_defects[0].angle_deg"},

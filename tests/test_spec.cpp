@@ -48,6 +48,7 @@ TEST(SpecDefaults, EmptyTwistGetsEveryDocumentedDefault) {
   EXPECT_DOUBLE_EQ(t.hold_ps(), 100.0);
   EXPECT_EQ(t.boundary(), mdem::v1::CONSTANT_MOMENT);
   EXPECT_EQ(t.grip_load(), mdem::v1::RIGID_GRIP);
+  EXPECT_EQ(t.grip_hold(), mdem::v1::HOLD_POSITIONS);
   EXPECT_TRUE(t.has_unload());
   EXPECT_FALSE(t.unload());
   EXPECT_DOUBLE_EQ(t.unload_hold_ps(), 50.0);
@@ -174,6 +175,11 @@ const std::vector<FieldCase>& field_cases() {
        {"3", "-2"},
        "allowed: RIGID_GRIP, PER_ELEMENT",
        false},
+      {R"({"twist":{"grip_hold":$}})",
+       "twist.grip_hold",
+       {"3", "-1"},
+       "allowed: HOLD_POSITIONS, HOLD_POSITIONS_AND_SPINS",
+       false},
       {R"({"twist":{"unload_hold_ps":$}})",
        "twist.unload_hold_ps",
        {"-0.1", "1e7"},
@@ -210,6 +216,20 @@ TEST(SpecValidate, OutOfRangeMessageNamesTheValue) {
                    {"11 is out of range (allowed: >= 2 and <= 10 layers)"});
   expect_one_error(json_errors(R"({"twist":{"missing_tubes":[91]}})"), "twist.missing_tubes[0]",
                    {"site 91 does not exist (allowed: 0..90 for 6 layers)"});
+}
+
+// Only a twist-relaxation hold holds the grips: held spins under a constant moment are refused.
+TEST(SpecValidate, HeldSpinsNeedTheTwistRelaxationBoundary) {
+  expect_one_error(json_errors(R"({"twist":{"grip_hold":"HOLD_POSITIONS_AND_SPINS"}})"),
+                   "twist.grip_hold",
+                   {"boundary is CONSTANT_MOMENT",
+                    "allowed: HOLD_POSITIONS_AND_SPINS with boundary TWIST_RELAXATION, or "
+                    "HOLD_POSITIONS"});
+  expect_one_error(json_errors(R"({"twist":{"grip_hold":"SPINS"}})"), "json",
+                   {"twist.grip_hold", "HOLD_POSITIONS, HOLD_POSITIONS_AND_SPINS"});
+  const JobSpec held = finalized_json(
+      R"({"twist":{"boundary":"TWIST_RELAXATION", "grip_hold":"HOLD_POSITIONS_AND_SPINS"}})");
+  EXPECT_EQ(held.twist().grip_hold(), mdem::v1::HOLD_POSITIONS_AND_SPINS);
 }
 
 TEST(SpecValidate, EachDoubleFieldRefusesNonFiniteJsonStrings) {

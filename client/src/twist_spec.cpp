@@ -18,6 +18,7 @@ const FlagFields& twist_flag_fields() {
       {"--hold", "twist.hold_ps"},
       {"--bc", "twist.boundary"},
       {"--grip-load", "twist.grip_load"},
+      {"--grip-hold", "twist.grip_hold"},
       {"--unload", "twist.unload"},
       {"--unload-hold", "twist.unload_hold_ps"},
       {"--grip-segments", "twist.grip_segments"},
@@ -72,6 +73,10 @@ void apply_twist_flags(const FlagValues& f, v1::JobSpec& spec) {
     t.set_grip_load(
         choice<v1::GripLoad>("--grip-load", val("--grip-load"),
                              {{"rigid-grip", v1::RIGID_GRIP}, {"per-element", v1::PER_ELEMENT}}));
+  if (has("--grip-hold"))
+    t.set_grip_hold(choice<v1::GripHold>("--grip-hold", val("--grip-hold"),
+                                         {{"positions", v1::HOLD_POSITIONS},
+                                          {"positions-and-spins", v1::HOLD_POSITIONS_AND_SPINS}}));
   if (has("--unload")) t.set_unload(true);
   if (has("--unload-hold")) t.set_unload_hold_ps(number("--unload-hold", val("--unload-hold")));
   if (has("--grip-segments"))
@@ -114,6 +119,9 @@ std::string twist_flags_help() {
          "T)\n"
          "                       or per-element (each grip element carries T about its own\n"
          "                       centre, the thesis's PFC ball moments)\n"
+         "  --grip-hold H        what --bc twist-relaxation holds: positions (default: the grip\n"
+         "                       elements spin freely, the thesis's §4.3) or positions-and-spins\n"
+         "                       (clamped: keeps each tube's twist under --grip-load per-element)\n"
          "  --unload             ramp the torque down after the hold, then relax\n" +
          flag_help("--unload-hold X", "relaxation after unloading", r::kUnloadHoldPs,
                    default_of(d::kUnloadHoldPs)) +
@@ -143,7 +151,11 @@ std::string describe_twist(Job& job, const v1::JobSpec& spec) {
     << " segments = " << job.system().elements().size() << " elements, " << job.duration()
     << " ps (ramp " << twist->protocol().ramp_time() << " ps to " << t.torque_nn_nm()
     << " nN·nm, hold " << t.hold_ps() << " ps, "
-    << (t.boundary() == v1::TWIST_RELAXATION ? "twist-relaxation" : "constant-moment") << ")";
+    << (t.boundary() == v1::TWIST_RELAXATION
+            ? (t.grip_hold() == v1::HOLD_POSITIONS_AND_SPINS ? "twist-relaxation, grips clamped"
+                                                             : "twist-relaxation")
+            : "constant-moment")
+    << ")";
   return o.str();
 }
 

@@ -29,6 +29,8 @@ TwistJobSpec twist_job_spec(const v1::JobSpec& spec) {
   l.boundary = t.boundary() == v1::TWIST_RELAXATION ? TwistBoundary::TwistRelaxation
                                                     : TwistBoundary::ConstantMoment;
   l.grip_load = t.grip_load() == v1::PER_ELEMENT ? GripLoad::PerElement : GripLoad::RigidGrip;
+  l.grip_hold = t.grip_hold() == v1::HOLD_POSITIONS_AND_SPINS ? GripHold::PositionsAndSpins
+                                                              : GripHold::Positions;
   l.unload = t.unload();
   l.unload_hold = t.unload_hold_ps();
   job.vdw_damping_ratio = t.vdw_damping_ratio();

@@ -28,6 +28,7 @@ void default_twist_loading(mdem::v1::TwistSpec& t) {
   if (t.boundary() == mdem::v1::TWIST_BOUNDARY_UNSPECIFIED)
     t.set_boundary(mdem::v1::CONSTANT_MOMENT);
   if (t.grip_load() == mdem::v1::GRIP_LOAD_UNSPECIFIED) t.set_grip_load(mdem::v1::RIGID_GRIP);
+  if (t.grip_hold() == mdem::v1::GRIP_HOLD_UNSPECIFIED) t.set_grip_hold(mdem::v1::HOLD_POSITIONS);
   if (!t.has_unload()) t.set_unload(d::kUnload);
   if (!t.has_unload_hold_ps()) t.set_unload_hold_ps(d::kUnloadHoldPs);
 }
@@ -121,6 +122,22 @@ void check_grip_load(const mdem::v1::TwistSpec& t, Report& rep) {
                                  "RIGID_GRIP)");
 }
 
+// Only a twist-relaxation hold holds anything: under a constant moment the grips are loaded.
+void check_grip_hold(const mdem::v1::TwistSpec& t, Report& rep) {
+  if (!mdem::v1::GripHold_IsValid(t.grip_hold())) {
+    rep.add("twist.grip_hold", std::to_string(t.grip_hold()) +
+                                   " is not a grip hold (allowed: HOLD_POSITIONS, "
+                                   "HOLD_POSITIONS_AND_SPINS; unset = HOLD_POSITIONS)");
+    return;
+  }
+  if (t.grip_hold() == mdem::v1::HOLD_POSITIONS_AND_SPINS &&
+      t.boundary() != mdem::v1::TWIST_RELAXATION)
+    rep.add("twist.grip_hold",
+            "HOLD_POSITIONS_AND_SPINS holds the grips of a twist-relaxation hold, but boundary is "
+            "CONSTANT_MOMENT, whose grips carry the torque and are not held (allowed: "
+            "HOLD_POSITIONS_AND_SPINS with boundary TWIST_RELAXATION, or HOLD_POSITIONS)");
+}
+
 void check_loading(const mdem::v1::TwistSpec& t, Report& rep) {
   rep.real("twist.torque_nn_nm", t.has_torque_nn_nm(), t.torque_nn_nm(), r::kTorqueNnNm);
   rep.real("twist.torque_rate_nn_nm_per_ps", t.has_torque_rate_nn_nm_per_ps(),
@@ -128,6 +145,7 @@ void check_loading(const mdem::v1::TwistSpec& t, Report& rep) {
   rep.real("twist.hold_ps", t.has_hold_ps(), t.hold_ps(), r::kHoldPs);
   check_boundary(t, rep);
   check_grip_load(t, rep);
+  check_grip_hold(t, rep);
   rep.real("twist.unload_hold_ps", t.has_unload_hold_ps(), t.unload_hold_ps(), r::kUnloadHoldPs);
 }
 

@@ -68,6 +68,10 @@ TwistProtocol::TwistProtocol(TwistLoading l, std::vector<std::size_t> a, std::ve
     throw std::invalid_argument("twist grips must hold at least one element each");
   if (!(axis.allFinite() && axis.norm() > 0))
     throw std::invalid_argument("twist axis must be a finite non-zero vector");
+  if (l.grip_hold == GripHold::PositionsAndSpins && l.boundary != TwistBoundary::TwistRelaxation)
+    throw std::invalid_argument(
+        "twist grip hold 'positions and spins' needs the twist-relaxation boundary (under a "
+        "constant moment the grips are loaded, not held)");
   axis_ = axis.normalized();
 }
 
@@ -122,10 +126,15 @@ void TwistProtocol::load_grip(Elements& el, const std::vector<std::size_t>& grip
   }
 }
 
-void TwistProtocol::hold_grip_positions(Elements& el, const std::vector<std::size_t>& grip) const {
+void TwistProtocol::hold_grip(Elements& el, const std::vector<std::size_t>& grip) const {
+  const bool spins = loading_.grip_hold == GripHold::PositionsAndSpins;
   for (std::size_t i : grip) {
     for (int k = 0; k < 3; ++k) el.dof[i][k] = DofMode::Prescribed;
     el.v_prescribed[i].setZero();
+    if (spins) {
+      for (int k = 3; k < 6; ++k) el.dof[i][k] = DofMode::Prescribed;
+      el.w_prescribed[i].setZero();
+    }
     el.f_ext[i].setZero();
     el.t_ext[i].setZero();
   }
@@ -133,7 +142,7 @@ void TwistProtocol::hold_grip_positions(Elements& el, const std::vector<std::siz
 
 void TwistProtocol::release_grip(Elements& el, const std::vector<std::size_t>& grip) const {
   for (std::size_t i : grip) {
-    for (int k = 0; k < 3; ++k) el.dof[i][k] = DofMode::Free;
+    el.dof[i].fill(DofMode::Free);
     el.f_ext[i].setZero();
     el.t_ext[i].setZero();
   }
@@ -145,8 +154,8 @@ void TwistProtocol::apply(System& sys, double t) {
   const bool relax_bc = loading_.boundary == TwistBoundary::TwistRelaxation;
   if (relax_bc && p != last_phase_) {
     if (p == TwistPhase::Holding) {
-      hold_grip_positions(el, grip_a_);
-      hold_grip_positions(el, grip_b_);
+      hold_grip(el, grip_a_);
+      hold_grip(el, grip_b_);
     } else if (p == TwistPhase::Relaxing || (p == TwistPhase::Done && loading_.unload)) {
       release_grip(el, grip_a_);
       release_grip(el, grip_b_);
@@ -199,6 +208,7 @@ void TwistProtocol::save_state(StateWriter& w) const {
   w.put(l.unload);
   w.put(l.unload_hold);
   w.put(l.grip_load);
+  w.put(l.grip_hold);
   w.put(last_phase_);
 }
 
@@ -214,13 +224,14 @@ void TwistProtocol::load_state(StateReader& r) {
   s.unload = r.get_bool("unload");
   s.unload_hold = r.get<double>("unload_hold");
   s.grip_load = r.get<GripLoad>("grip_load");
+  s.grip_hold = r.get<GripHold>("grip_hold");
   const TwistLoading& l = loading_;
   if (s.torque_max != l.torque_max || s.rate != l.rate || s.hold != l.hold ||
       s.boundary != l.boundary || s.unload != l.unload || s.unload_hold != l.unload_hold ||
-      s.grip_load != l.grip_load)
+      s.grip_load != l.grip_load || s.grip_hold != l.grip_hold)
     r.fail("loading",
-           "the checkpoint's twist loading (torque, rate, hold times, boundary or grip "
-           "load) differs from this job's");
+           "the checkpoint's twist loading (torque, rate, hold times, boundary, grip load or "
+           "grip hold) differs from this job's");
   const auto phase = r.get<TwistPhase>("last phase");
   if (static_cast<int>(phase) < 0 || static_cast<int>(phase) > static_cast<int>(TwistPhase::Done))
     r.fail("last phase", "holds an unknown phase " + std::to_string(static_cast<int>(phase)));

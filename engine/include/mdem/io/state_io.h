@@ -136,7 +136,8 @@ class StateReader {
 // 5: the elements' topology (bonds, tube chains, rings) and groups, loaded in place of the job's.
 // 6: multiple time stepping: respa_k, and the slow models' energy held between outer steps.
 // 7: element arrays in tag order (tags first), then their memory order (memory_order.h).
-inline constexpr std::uint32_t kCheckpointVersion = 7;
+// 8: the twist protocol's grip hold (positions, or positions and spins).
+inline constexpr std::uint32_t kCheckpointVersion = 8;
 
 // A part of a job that a run changes and a checkpoint must carry (a protocol, an observer, a
 // stage): it writes and reads its own state, so no job lists fields in a checkpoint by hand.

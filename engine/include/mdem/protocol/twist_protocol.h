@@ -14,9 +14,12 @@
 // Boundary conditions during the hold:
 //   constant-moment   the grips keep the held torque and turn with the rope;
 //   twist-relaxation  the grip positions are held where they are (prescribed zero velocity; the
-//                     kinetic energy this removes is booked as constraint work), the torque is
-//                     removed and the grip elements spin freely, so physical twist relaxes while
-//                     the geometric twist stays (§4.3, end).
+//                     kinetic energy this removes is booked as constraint work) and the torque is
+//                     removed. What else is held is GripHold: with Positions (the thesis's "fixed
+//                     but allowed free spin", §4.3 end) the grip elements spin freely, so physical
+//                     twist relaxes while the geometric twist stays; with PositionsAndSpins their
+//                     orientations are held too (prescribed zero angular velocity), a clamp that
+//                     keeps the twist each tube stores in its end elements' rotations.
 // Unloading: constant-moment ramps the torque down at the same rate, then relaxes at zero torque;
 // twist-relaxation releases the grips and relaxes.
 #include <cstddef>
@@ -33,6 +36,15 @@ namespace mdem {
 struct Elements;
 
 enum class TwistBoundary { ConstantMoment, TwistRelaxation };
+
+// What a twist-relaxation hold keeps where the ramp left it.
+enum class GripHold {
+  // The grip elements' positions; their spins are free (§4.3: the physical twist relaxes).
+  Positions,
+  // Positions and orientations: each grip element is clamped, and a tube twisted at its own end
+  // (the per-element load) keeps its twist.
+  PositionsAndSpins,
+};
 
 // How a grip carries the torque.
 enum class GripLoad {
@@ -65,12 +77,13 @@ struct TwistLoading {
   bool unload = false;
   double unload_hold = 0;  // ps at zero load after unloading
   GripLoad grip_load = GripLoad::RigidGrip;
+  GripHold grip_hold = GripHold::Positions;  // twist-relaxation only
 };
 
 class TwistProtocol final : public Protocol {
  public:
   // Throws std::invalid_argument for a non-positive or non-finite torque or rate, negative hold
-  // times, empty grips, or a zero axis.
+  // times, empty grips, a zero axis, or held spins under a constant moment (nothing is held).
   TwistProtocol(TwistLoading loading, std::vector<std::size_t> grip_a,
                 std::vector<std::size_t> grip_b, Vec3 axis = Vec3::UnitZ());
 
@@ -107,7 +120,8 @@ class TwistProtocol final : public Protocol {
 
  private:
   void load_grip(Elements& el, const std::vector<std::size_t>& grip, double torque) const;
-  void hold_grip_positions(Elements& el, const std::vector<std::size_t>& grip) const;
+  // Holds what loading_.grip_hold says (prescribed zero velocities) and removes the load.
+  void hold_grip(Elements& el, const std::vector<std::size_t>& grip) const;
   void release_grip(Elements& el, const std::vector<std::size_t>& grip) const;
 
   TwistLoading loading_;
