@@ -34,6 +34,7 @@
 // PairModel<K> makes a ForceModel of it.
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
@@ -183,6 +184,14 @@ inline void prefetch_vec3(const Vec3* p) {
   __builtin_prefetch(reinterpret_cast<const char*>(p) + sizeof(Vec3) - 1, kWrite, 3);
 }
 
+// Prefetch of the line holding the last byte of *p only. The j of a row come in runs of
+// consecutive elements (a tube's segments), so the first line of p[j] is the last line of p[j−1]
+// and one prefetch per element covers a run but for the first element's first line.
+template <int kWrite>
+inline void prefetch_vec3_end(const Vec3* p) {
+  __builtin_prefetch(reinterpret_cast<const char*>(p) + sizeof(Vec3) - 1, kWrite, 3);
+}
+
 // How far ahead in the neighbour list the gather prefetches x_j.
 inline constexpr std::uint32_t kPrefetchAhead = 16;
 
@@ -193,29 +202,35 @@ inline constexpr std::uint32_t kPrefetchAhead = 16;
 // (x_j at the gather, f_j and t_j at the scatter, the kernel's own per-element data) was most of
 // the driver's time: the gather prefetches x_j kPrefetchAhead pairs ahead, and, for each pair
 // gathered, the lines the scatter and the kernel (touch()) will use once the batch is full.
+// The loop works on raw pointers and a lane count held in a register: through the vectors and
+// b.n, GCC reloaded el.x's data pointer and b.n from memory at every pair (the batch escapes
+// into the kernel, so its stores may alias anything reached through a reference).
 template <bool kPeriodic, bool kFilter, class K>
 void run_batched(const K& k, const Elements& el, const NeighborList& list, ForceSink& sink,
                  bool threaded) {
-  const auto& off = list.offsets();
-  const auto& nb = list.neighbors();
+  const std::uint32_t* const off = list.offsets().data();
+  const std::uint32_t* const nb = list.neighbors().data();
   const Domain& domain = list.domain();
   const long n = static_cast<long>(el.size());
   const double rc2 = k.cutoff() * k.cutoff();
+  const std::uint32_t listed = static_cast<std::uint32_t>(list.neighbors().size());
 #pragma omp parallel num_threads(sink.threads()) if (threaded)
   {
     prepare_all(k, el, n);
     const int tid = omp_get_thread_num();
     Vec3* __restrict f = force_buffer<K>(sink, tid);
     Vec3* __restrict t = torque_buffer<K>(sink, tid);
+    const Vec3* __restrict x = el.x.data();
     double energy = 0.0;
     PairBatch b;
-    const auto flush = [&] {
+    const auto flush = [&](int lanes) {
+      b.n = lanes;
       k.batch(el, b);
       // The pairs of one i are consecutive: their forces on i are summed in registers and added
       // to f_i, t_i once per run of i.
       std::uint32_t ci = b.i[0];
       Vec3 fi = Vec3::Zero(), ti = Vec3::Zero();
-      for (int p = 0; p < b.n; ++p) {
+      for (int p = 0; p < lanes; ++p) {
         if (b.i[p] != ci) {
           f[ci] += fi;
           if constexpr (K::kTorques) t[ci] += ti;
@@ -234,34 +249,41 @@ void run_batched(const K& k, const Elements& el, const NeighborList& list, Force
       }
       f[ci] += fi;
       if constexpr (K::kTorques) t[ci] += ti;
-      b.n = 0;
     };
-    const std::uint32_t listed = static_cast<std::uint32_t>(nb.size());
-    const auto [first, last] = balanced_rows(off, tid, omp_get_num_threads());
+    std::uint32_t* const bi = b.i;
+    std::uint32_t* const bj = b.j;
+    double* const bx = b.dx;
+    double* const by = b.dy;
+    double* const bz = b.dz;
+    int lanes = 0;
+    const auto [first, last] = balanced_rows(list.offsets(), tid, omp_get_num_threads());
     for (long i = first; i < last; ++i) {
       const std::uint32_t begin = off[i], end = off[i + 1];
-      const Vec3 xi = el.x[i];
+      const Vec3 xi = x[i];
       for (std::uint32_t m = begin; m < end; ++m) {
         const std::uint32_t j = nb[m];
-        if (m + kPrefetchAhead < listed) prefetch_vec3<0>(&el.x[nb[m + kPrefetchAhead]]);
+        prefetch_vec3_end<0>(x + nb[std::min(m + kPrefetchAhead, listed - 1)]);
         if constexpr (kFilter) {
           if (k.excludes(el, i, j)) continue;
         }
-        prefetch_vec3<1>(f + j);
-        if constexpr (K::kTorques) prefetch_vec3<1>(t + j);
+        prefetch_vec3_end<1>(f + j);
+        if constexpr (K::kTorques) prefetch_vec3_end<1>(t + j);
         if constexpr (requires { k.touch(j); }) k.touch(j);
-        const Vec3 d = displacement<kPeriodic>(domain, xi, el.x[j]);
+        const Vec3 d = displacement<kPeriodic>(domain, xi, x[j]);
         // Written to the next free lane, kept when within the cutoff (a NaN is kept too).
-        b.i[b.n] = static_cast<std::uint32_t>(i);
-        b.j[b.n] = j;
-        b.dx[b.n] = d.x();
-        b.dy[b.n] = d.y();
-        b.dz[b.n] = d.z();
-        b.n += !(d.squaredNorm() >= rc2);
-        if (b.n == PairBatch::kCapacity) flush();
+        bi[lanes] = static_cast<std::uint32_t>(i);
+        bj[lanes] = j;
+        bx[lanes] = d.x();
+        by[lanes] = d.y();
+        bz[lanes] = d.z();
+        lanes += !(d.squaredNorm() >= rc2);
+        if (lanes == PairBatch::kCapacity) {
+          flush(lanes);
+          lanes = 0;
+        }
       }
     }
-    if (b.n > 0) flush();
+    if (lanes > 0) flush(lanes);
     if constexpr (!K::kDissipative) sink.energy(tid).add(K::kTerm, energy);
   }
 }

@@ -207,8 +207,9 @@ struct CosTheta2 {
   const double dM_dc = -4.0 * w * c;
   // ∂U/∂R at fixed (c, p1, p2); ∂D/∂R = 1/(r δ).
   const double U_R = (dM_dR * fc + M * dfc) * v + mfc * dv * k.inv_r * inv_delta;
-  // ∂U/∂u through δ; ∂D/∂δ = −R/(r δ²) = −(D + 2)/δ.
-  const double U_u = -mfc * dv * (d + 2.0) * inv_delta * ddelta_du;
+  // ∂U/∂u through δ; ∂D/∂δ = −R/(r δ²) = −(D + 2)/δ, with D + 2 = R/(r δ) as such (D + 2 would
+  // cancel to a few digits as R → 0, where D → −2).
+  const double U_u = -mfc * dv * (R * k.inv_r * inv_delta) * inv_delta * ddelta_du;
   const double U_p1 = U_u * ct.u_p1;
   const double U_p2 = U_u * ct.u_p2;
   const double U_cM = dM_dc * fc * v;  // through M (γ) only

@@ -7,7 +7,11 @@
 // - no branches: both sides of every case (linear overlap branch / Lennard-Jones branch, inside /
 //   outside the cutoff ramp, above / below W's knee, inside / outside the flip-blend window) are
 //   computed and selected per lane; lanes beyond the cutoff are zeroed by a mask;
-// - one divide gives both 1/R and 1/(2(1 + |c|)): q = 1/(R (1 + |c|));
+// - the divides and square roots run side by side rather than one after another (the kernel was
+//   waiting on their latency): g0 = 1/(R² (1 + |c|)) next to R = √R² gives 1/R and
+//   1/(2(1 + |c|)); g = 1/(δ m), m = δ max(D, d_min), next to √(δ m) gives 1/δ, 1/max(D, d_min)
+//   and max(D, d_min)^-1.5; the flip-blend window's 1/(1 ± c) share one divide;
+// - D + 2 in ∂U/∂u is taken as X/δ (as in the scalar kernel), not as D + 2, which cancels;
 // - the cutoff smoothstep is evaluated at t clamped to [0, 1], which gives exactly f_c = 1, 0 and
 //   f_c' = 0 outside the ramp;
 // - the second signed cos²θ and the blend are computed only for vectors with a lane in the
@@ -55,12 +59,13 @@ HWY_INLINE bool lanes(const VdwConstants& k, const Lanes& l, std::size_t o) {
   const V c = hn::MulAdd(ax, bx, hn::MulAdd(ay, by, az * bz));
   const V one_minus_c2 = hn::NegMulAdd(c, c, one);
 
-  // One divide for 1/R and for 1/(2(1 + |c|)), the signed cos²θ's denominator.
+  // 1/R and 1/(2(1 + |c|)), the signed cos²θ's denominator, from one divide g0 = 1/(R² h) that
+  // runs alongside the square root R = √R² (not after it): 1/R = R h g0, 1/(2h) = R² g0 / 2.
   const V R = hn::Sqrt(R2);
   const V h = one + hn::Abs(c);
-  const V q0 = one / (R * h);
-  const V inv_R = h * q0;
-  const V inv_h = hn::Set(d, 0.5) * R * q0;
+  const V g0 = one / (R2 * h);
+  const V inv_R = R * h * g0;
+  const V inv_h = hn::Set(d, 0.5) * R2 * g0;
   const V nx = rx * inv_R, ny = ry * inv_R, nz = rz * inv_R;
   const V p1 = hn::MulAdd(ax, nx, hn::MulAdd(ay, ny, az * nz));
   const V p2 = hn::MulAdd(bx, nx, hn::MulAdd(by, ny, bz * nz));
@@ -73,8 +78,10 @@ HWY_INLINE bool lanes(const VdwConstants& k, const Lanes& l, std::size_t o) {
     const auto window = hn::AndNot(beyond, hn::Lt(hn::Abs(c), hn::Set(d, blend)));
     if (!hn::AllFalse(d, window)) {
       const V half = hn::Set(d, 0.5);
-      const CosTheta2 a = signed_u(d, one, p1, p2, half / (one + c));
-      const CosTheta2 b = signed_u(d, hn::Neg(one), p1, p2, half / (one - c));
+      // 1/(2(1 ± c)) from one divide (|c| < blend ≤ 0.5 here, so (1 + c)(1 − c) loses nothing).
+      const V g = half / ((one + c) * (one - c));
+      const CosTheta2 a = signed_u(d, one, p1, p2, (one - c) * g);
+      const CosTheta2 b = signed_u(d, hn::Neg(one), p1, p2, (one + c) * g);
       const V t = (c + hn::Set(d, blend)) * hn::Set(d, 0.5 / blend);
       const V w = t * t * hn::NegMulAdd(two, t, hn::Set(d, 3.0));
       const V dw = hn::Set(d, 3.0) * t * (one - t) * hn::Set(d, 1.0 / blend);
@@ -107,17 +114,26 @@ HWY_INLINE bool lanes(const VdwConstants& k, const Lanes& l, std::size_t o) {
                             hn::Set(d, 2 * a[2])),
                  hn::Set(d, a[1]));
   const V ddelta_du = two * dy;
-  const V inv_delta = one / delta;
   const V inv_r = hn::Set(d, k.inv_r);
-  const V dd = hn::MulSub(R * inv_r, inv_delta, two);  // D
-
-  // V(D), V'(D): Lennard-Jones branch at max(D, d_min) (D^-9.5 = D^-8 · √(D^-3), D^-4 = D^-4),
-  // the linear continuation below d_min.
+  // D = X/δ − 2 with X = R/r, and 1/δ, 1/max(D, d_min), max(D, d_min)^-1.5 from one divide and
+  // one square root of p = δ m, m = max(X − 2δ, d_min δ) = δ max(D, d_min) (δ > 0), side by
+  // side: g = 1/p, 1/δ = g m, 1/max(D, d_min) = g δ², max(D, d_min)^-1.5 = δ³ g² √p.
   const V d_min = hn::Set(d, p.d_min);
-  const V inv = one / hn::Max(dd, d_min);
+  const V m_raw = hn::NegMulAdd(two, delta, R * inv_r);  // X − 2δ = δ D
+  const V m = hn::Max(m_raw, d_min * delta);
+  const V pm = delta * m;
+  const V g = one / pm;
+  const V sq = hn::Sqrt(pm);
+  const V inv_delta = g * m;
+  const V dd = m_raw * inv_delta;  // D
+
+  // V(D), V'(D): Lennard-Jones branch at max(D, d_min) (D^-9.5 = D^-8 · D^-1.5, D^-4), the
+  // linear continuation below d_min.
+  const V delta2 = delta * delta;
+  const V inv = g * delta2;
   const V inv2 = inv * inv;
   const V inv4 = inv2 * inv2;
-  const V da = inv4 * inv4 * hn::Sqrt(inv2 * inv);
+  const V da = inv4 * inv4 * ((delta2 * delta) * (g * g) * sq);
   const V four_eps = hn::Set(d, k.four_eps);
   const V v_lj = four_eps * (hn::Set(d, p.A) * da - hn::Set(d, p.B) * inv4);
   const V dv_lj =
@@ -147,7 +163,8 @@ HWY_INLINE bool lanes(const VdwConstants& k, const Lanes& l, std::size_t o) {
   const V dM_dR = two * dw * one_minus_c2;
   const V dM_dc = hn::Set(d, -4.0) * w * c;
   const V U_R = hn::MulAdd(dM_dR * fc + M * dfc, v, mfc * dv * inv_r * inv_delta);
-  const V U_u = hn::Neg(mfc * dv * (dd + two) * inv_delta * ddelta_du);
+  // D + 2 = X/δ taken as such: D + 2 cancels to a few digits where R → 0 (D → −2).
+  const V U_u = hn::Neg(mfc * dv * (R * inv_r * inv_delta) * inv_delta * ddelta_du);
   const V U_p1 = U_u * ct.u_p1, U_p2 = U_u * ct.u_p2;
   const V U_cM = dM_dc * fc * v;
   const V U_c = hn::MulAdd(U_u, ct.u_c, U_cM);
