@@ -9,6 +9,7 @@
 #include <limits>
 #include <sstream>
 
+#include "integrate/step_kernels.h"
 #include "mdem/core/limits.h"
 
 namespace mdem {
@@ -32,182 +33,47 @@ inline void lap(Clock::time_point& mark, double& seconds) {
   mark = now;
 }
 
-// Free rotation of a rigid body with principal inertia I (body frame) over time h, by the
-// symmetric splitting of Dullweber, Leimkuhler and McLachlan: each step is an exact rotation
-// about one body axis, so the scheme stays stable and norm-preserving under fast spin.
-void free_rotor(Quat& q, Vec3& L_world, const Vec3& I, double h) {
-  Vec3 Lb = q.conjugate() * L_world;
-  auto sub = [&](int axis, double tau) {
-    const double phi = Lb[axis] / I[axis] * tau;
-    Vec3 e = Vec3::Zero();
-    e[axis] = phi;
-    const Quat r = quat_exp(e);
-    q = q * r;
-    Lb = r.conjugate() * Lb;
-  };
-  sub(0, 0.5 * h);
-  sub(1, 0.5 * h);
-  sub(2, h);
-  sub(1, 0.5 * h);
-  sub(0, 0.5 * h);
-  q.normalize();
-  L_world = q * Lb;
-}
-
-Vec3 world_inertia_times(const Quat& q, const Vec3& I, const Vec3& w) {
-  return q * (I.cwiseProduct(q.conjugate() * w));
-}
-
-Vec3 world_inertia_inverse_times(const Quat& q, const Vec3& I, const Vec3& L) {
-  return q * ((q.conjugate() * L).cwiseQuotient(I));
-}
-
-// First half kick of one scalar DOF with inertia m (a mass, or an isotropic moment of inertia):
-// the force at t_n acts for h = dt/2. Books the damping power at v_n, and half of the coming
-// drift's work of the external load (free DOF) or of the constraint (prescribed DOF, including
-// the kinetic energy it injects when its velocity changes).
-inline void first_half_kick(DofMode mode, double& v, double F, double F_ext, double F_damp,
-                            double v_presc, double m, double inv_m, double h, double& work,
-                            double& diss) {
-  const double v0 = v;
-  diss -= F_damp * v0 * h;
-  switch (mode) {
-    case DofMode::Free:
-      v = v0 + h * (F + F_ext + F_damp) * inv_m;
-      work += F_ext * v * h;
-      break;
-    case DofMode::Prescribed:
-      work += 0.5 * m * (v_presc * v_presc - v0 * v0);
-      v = v_presc;
-      work -= (F + F_damp) * v * h;
-      break;
-    case DofMode::Fixed:
-      v = 0;
-      break;
-  }
-}
-
-// Second half kick of one scalar DOF with the forces at t_{n+1}: the other half of the drift's
-// work, then the damping power at v_{n+1}.
-inline void second_half_kick(DofMode mode, double& v, double F, double F_ext, double F_damp,
-                             double v_presc, double m, double inv_m, double h, double& work,
-                             double& diss) {
-  switch (mode) {
-    case DofMode::Free:
-      work += F_ext * v * h;
-      v += h * (F + F_ext + F_damp) * inv_m;
-      break;
-    case DofMode::Prescribed:
-      work -= (F + F_damp) * v * h;
-      work += 0.5 * m * (v_presc * v_presc - v * v);
-      v = v_presc;
-      break;
-    case DofMode::Fixed:
-      v = 0;
-      break;
-  }
-  diss -= F_damp * v * h;
-}
-
-// Half kick of the angular momentum of an anisotropic body (all rotational DOFs free).
-inline void kick_anisotropic(const Quat& q, const Vec3& I, Vec3& w, const Vec3& torque, double h) {
-  const Vec3 L = world_inertia_times(q, I, w) + h * torque;
-  w = world_inertia_inverse_times(q, I, L);
-}
-
-// PFC local damping on the unbalanced force of every free DOF of element i: F_k -= α|F_k|
-// sign(v_k), added to the model dampers' forces in fd, td (or to zero without them).
-// With multiple time stepping, net (non-null) adds w·(the held slow forces) to the unbalanced
-// force: the net force F_fast + F_slow, not the kick's impulse (RespaSplit::net_weight).
-inline void local_damping(Elements& E, std::size_t i, double a, bool model_damping, Vec3& fd,
-                          Vec3& td, const RespaSplit* net = nullptr, double w = 0) {
-  Vec3 nf = Vec3::Zero(), nt = Vec3::Zero();
-  if (net) {
-    nf = w * (net->f[i] + net->fd[i]);
-    nt = w * (net->t[i] + net->td[i]);
-  }
-  if (!model_damping) {
-    fd.setZero();
-    td.setZero();
-  }
-  const auto& dof = E.dof[i];
-  for (int k = 0; k < 3; ++k) {
-    if (is_free(dof[k])) {
-      double F = E.f[i][k] + E.f_ext[i][k] + fd[k];
-      if (net) F += nf[k];
-      const double vk = E.v[i][k];
-      fd[k] -= a * std::abs(F) * (vk > 0 ? 1.0 : vk < 0 ? -1.0 : 0.0);
-    }
-    if (is_free(dof[k + 3])) {
-      double M = E.t[i][k] + E.t_ext[i][k] + td[k];
-      if (net) M += nt[k];
-      const double wk = E.w[i][k];
-      td[k] -= a * std::abs(M) * (wk > 0 ? 1.0 : wk < 0 ? -1.0 : 0.0);
-    }
-  }
-}
-
-// Kinetic energies of element i (translational, rotational).
-inline double kinetic_translational(const Elements& E, std::size_t i) {
-  return 0.5 * E.mass[i] * E.v[i].squaredNorm();
-}
-// An isotropic body's (the integrator's isotropic branch, moment of inertia I.x()) without the
-// two quaternion rotations of the general form.
-inline double kinetic_rotational(const Elements& E, std::size_t i, bool isotropic) {
-  if (isotropic) return 0.5 * E.inertia[i].x() * E.w[i].squaredNorm();
-  return 0.5 * E.w[i].dot(world_inertia_times(E.q[i], E.inertia[i], E.w[i]));
-}
-
-// The drift of an isotropic body's orientation, exp(φ) q with φ = ω dt, renormalised. Below
-// |φ| = 0.1 rad (every step of a stable run: the runaway check stops at 1 rad) cos(|φ|/2) and
-// sin(|φ|/2)/|φ| come from their Taylor series in x = |φ|²/4 (first omitted terms below 1e-19
-// relative), without the square root, sine and cosine of quat_exp; the renormalisation of a
-// product of unit quaternions (|q|² = 1 + e, |e| ~ 1e-16) from 1/√(1+e) = 1 − e/2 + 3e²/8 (exact to
-// round-off below |e| = 1e-6), without a square root and divisions. Results equal quat_exp and
-// normalized() to round-off.
-inline Quat drift_orientation(const Vec3& phi, const Quat& q) {
-  const double a2 = phi.squaredNorm();
-  Quat r;
-  if (a2 < 0.01) {
-    const double x = 0.25 * a2;
-    const double c =
-        1 + x * (-1.0 / 2 +
-                 x * (1.0 / 24 + x * (-1.0 / 720 + x * (1.0 / 40320 + x * (-1.0 / 3628800)))));
-    const double s =
-        0.5 * (1 + x * (-1.0 / 6 + x * (1.0 / 120 + x * (-1.0 / 5040 + x * (1.0 / 362880)))));
-    r = Quat(c, s * phi.x(), s * phi.y(), s * phi.z());
-  } else {
-    r = quat_exp(phi);
-  }
-  Quat out = r * q;
-  const double e = out.squaredNorm() - 1;
-  if (std::abs(e) < 1e-6)
-    out.coeffs() *= 1 + e * (-0.5 + 0.375 * e);
-  else
-    out.normalize();
-  return out;
-}
-
-// Adds body(i, sums)'s contributions to sums[0..N) over i in [0, n), threaded, in a fixed order:
-// each thread sums its static block into its own slot and the slots are added in thread order.
-// OpenMP's reduction(+) adds the threads' sums in the order they finish, which changes the last
-// bits from run to run, so a run (and a run resumed from a checkpoint) would not repeat exactly.
-template <std::size_t N, class Body>
-void ordered_sums(long n, std::vector<std::array<double, 6>>& partial, std::array<double*, N> sums,
-                  Body body) {
+// Adds body(i, sums, marks)'s contributions to sums[0..N) over i in [0, n), threaded, in a fixed
+// order: each thread sums its static block into its own slot and the slots are added in thread
+// order. OpenMP's reduction(+) adds the threads' sums in the order they finish, which changes the
+// last bits from run to run, so a run (and a run resumed from a checkpoint) would not repeat
+// exactly. marks[k]: the largest element index the body flagged with k (-1: none), per thread
+// then over the threads (a maximum, exact in any order); no critical section in the loop.
+// Each thread runs its own copy of body, so the values it captured stay in registers.
+template <std::size_t N, class Slots, class Body>
+std::array<long, 2> ordered_sums(long n, Slots& partial, std::array<double*, N> sums,
+                                 const Body& body) {
   static_assert(N <= 6);
   const int team = static_cast<int>(partial.size());
+  int used = 1;  // the threads that ran (and wrote their slot)
 #pragma omp parallel num_threads(team) if (n >= kParallelMinItems)
   {
+    const Body b = body;
     std::array<double, N> ts{};
-#pragma omp for schedule(static)
-    for (long i = 0; i < n; ++i) body(i, ts);
-    std::copy(ts.begin(), ts.end(), partial[omp_get_thread_num()].begin());
+    std::array<long, 2> marks{-1, -1};
+#pragma omp for schedule(static) nowait
+    for (long i = 0; i < n; ++i) b(i, ts, marks);
+    auto& slot = partial[omp_get_thread_num()];
+    for (std::size_t k = 0; k < N; ++k) slot.sum[k] = ts[k];  // (std::copy would keep ts in memory)
+    slot.mark = marks;
+    if (omp_get_thread_num() == 0) used = omp_get_num_threads();
   }
-  // Threads of a team smaller than the slots (the serial branch) added nothing.
-  const int used = n >= kParallelMinItems ? team : 1;
-  for (int t = 0; t < used; ++t)
-    for (std::size_t k = 0; k < N; ++k) *sums[k] += partial[t][k];
+  std::array<long, 2> marks{-1, -1};
+  for (int t = 0; t < used; ++t) {
+    for (std::size_t k = 0; k < N; ++k) *sums[k] += partial[t].sum[k];
+    for (int k = 0; k < 2; ++k) marks[k] = std::max(marks[k], partial[t].mark[k]);
+  }
+  return marks;
+}
+
+// Runs f.template operator()<C>() with element i's class: FreeIsotropic when it is one and the
+// fast path is on, else General.
+template <class F>
+inline void by_class(bool fast, const Elements& E, long i, F&& f) {
+  if (fast && step::free_isotropic(E, static_cast<std::size_t>(i)))
+    f.template operator()<step::ElementClass::FreeIsotropic>();
+  else
+    f.template operator()<step::ElementClass::General>();
 }
 
 }  // namespace
@@ -303,7 +169,7 @@ void System::initialize() {
 
   const std::size_t n = el_.size();
   sink_.resize(n, threads_, model_damping);
-  partial_sums_.assign(threads_, std::array<double, 6>{});
+  partial_sums_.assign(threads_, ThreadSlot{});
   respa_.setup(s.respa_k, n);
   fd_.assign(n, Vec3::Zero());
   td_.assign(n, Vec3::Zero());
@@ -407,7 +273,14 @@ void System::compute_forces(bool with_local_damping, StepTimers* timers, bool in
   const RespaSplit* net = respa_.on() ? &respa_ : nullptr;
   const double w = respa_.net_weight(steps_);
 #pragma omp parallel for schedule(static) if (n >= kParallelMinItems)
-  for (long i = 0; i < n; ++i) local_damping(el_, i, a, model_damping, fd_[i], td_[i], net, w);
+  for (long i = 0; i < n; ++i) {
+    if (net)
+      step::local_damping<step::ElementClass::General, true>(el_, i, a, model_damping, fd_[i],
+                                                             td_[i], net, w);
+    else
+      step::local_damping<step::ElementClass::General, false>(el_, i, a, model_damping, fd_[i],
+                                                              td_[i], nullptr, 0);
+  }
 }
 
 void System::add_slow_forces(bool in_step) {
@@ -433,9 +306,9 @@ void System::add_slow_forces(bool in_step) {
 void System::update_kinetic() {
   double kt = 0, kr = 0;
   const long n = static_cast<long>(el_.size());
-  ordered_sums<2>(n, partial_sums_, {&kt, &kr}, [this](long i, std::array<double, 2>& k) {
-    k[0] += kinetic_translational(el_, i);
-    k[1] += kinetic_rotational(el_, i, el_.is_isotropic(i));
+  ordered_sums<2>(n, partial_sums_, {&kt, &kr}, [this](long i, auto& k, auto&) {
+    k[0] += step::kinetic_translational(el_, i);
+    k[1] += step::kinetic_rotational(el_, i, el_.is_isotropic(i));
   });
   ledger_.kinetic_translational = kt;
   ledger_.kinetic_rotational = kr;
@@ -506,81 +379,13 @@ void System::run(long nsteps) {
   const double a_local = settings_.local_damping;
   StepTimers& timers = timers_;
 
-  // 1. First half kick of element i with the forces at t_n; books half of the work of external
-  //    loads and constraints over the coming drift, and the power of damping at v_n. Then the
-  //    drift: position, and orientation by the exact exponential map (isotropic bodies, where ω
-  //    is constant in free rotation) or the DLM splitting (anisotropic).
+  // The per-element kernels (step_kernels.h): 1. first half kick and drift, 2. local damping,
+  // second half kick and kinetic energy. An element that ran away in 1. is marked 0, one whose
+  // velocity became non-finite in 2. is marked 1 (ordered_sums' marks). The context is taken
+  // afresh for each pass: a reordering of the elements (memory order) reallocates fd_, td_.
+  const bool fast = settings_.free_isotropic_fast_path;
+  auto context = [&] { return step::StepContext{&E, fd_.data(), td_.data(), dt, h}; };
   long runaway = -1;
-  auto first = [&](long i, double& work, double& diss) __attribute__((always_inline)) {
-    const auto& dof = E.dof[i];
-    for (int k = 0; k < 3; ++k)
-      first_half_kick(dof[k], E.v[i][k], E.f[i][k], E.f_ext[i][k], fd_[i][k], E.v_prescribed[i][k],
-                      E.mass[i], E.inv_mass[i], h, work, diss);
-    const bool isotropic = E.is_isotropic(i);
-    if (isotropic) {
-      const double I = E.inertia[i].x(), iI = 1.0 / I;
-      for (int k = 0; k < 3; ++k)
-        first_half_kick(dof[k + 3], E.w[i][k], E.t[i][k], E.t_ext[i][k], td_[i][k],
-                        E.w_prescribed[i][k], I, iI, h, work, diss);
-    } else {  // anisotropic: all rotational DOFs free (checked in initialize)
-      diss -= td_[i].dot(E.w[i]) * h;
-      kick_anisotropic(E.q[i], E.inertia[i], E.w[i], E.t[i] + E.t_ext[i] + td_[i], h);
-      work += E.t_ext[i].dot(E.w[i]) * h;
-    }
-
-    const Vec3 dx = E.v[i] * dt;
-    E.x[i] += dx;
-    if (isotropic) {
-      E.q[i] = drift_orientation(E.w[i] * dt, E.q[i]);
-    } else {
-      Vec3 L = world_inertia_times(E.q[i], E.inertia[i], E.w[i]);
-      free_rotor(E.q[i], L, E.inertia[i], dt);
-      E.w[i] = world_inertia_inverse_times(E.q[i], E.inertia[i], L);
-    }
-    // An element moving more than its radius, or turning more than a radian, in one step is
-    // not being integrated any more.
-    const double r = E.radius[i];
-    if (!(dx.squaredNorm() <= r * r) || !(E.w[i].squaredNorm() * (dt * dt) <= 1.0)) {
-#pragma omp critical(mdem_system_runaway)
-      runaway = std::max(runaway, i);
-    }
-  };
-
-  // 2. Local damping of element i's new forces, second half kick with the forces at t_{n+1}, the
-  //    rest of the work and damping books, and the kinetic energy at t_{n+1}. False (and i
-  //    recorded in `bad`) for a non-finite velocity.
-  bool local = false, model_damping = false;
-  const RespaSplit* net = nullptr;
-  double w_net = 0;
-  long bad = -1;
-  auto second = [&](long i, double& work, double& diss, double& kt, double& kr)
-      __attribute__((always_inline)) {
-    if (local) local_damping(E, i, a_local, model_damping, fd_[i], td_[i], net, w_net);
-    const auto& dof = E.dof[i];
-    for (int k = 0; k < 3; ++k)
-      second_half_kick(dof[k], E.v[i][k], E.f[i][k], E.f_ext[i][k], fd_[i][k], E.v_prescribed[i][k],
-                       E.mass[i], E.inv_mass[i], h, work, diss);
-    const bool isotropic = E.is_isotropic(i);
-    if (isotropic) {
-      const double I = E.inertia[i].x(), iI = 1.0 / I;
-      for (int k = 0; k < 3; ++k)
-        second_half_kick(dof[k + 3], E.w[i][k], E.t[i][k], E.t_ext[i][k], td_[i][k],
-                         E.w_prescribed[i][k], I, iI, h, work, diss);
-    } else {
-      work += E.t_ext[i].dot(E.w[i]) * h;
-      kick_anisotropic(E.q[i], E.inertia[i], E.w[i], E.t[i] + E.t_ext[i] + td_[i], h);
-      diss -= td_[i].dot(E.w[i]) * h;
-    }
-    kt += kinetic_translational(E, i);
-    kr += kinetic_rotational(E, i, isotropic);
-    if (!E.v[i].allFinite() || !E.w[i].allFinite()) {
-#pragma omp critical(mdem_system_bad_velocity)
-      bad = std::max(bad, i);
-      return false;
-    }
-    return true;
-  };
-
   // Each element's arithmetic is that of velocity Verlet, in one pass over the elements per step
   // (plus the force evaluation's own): pass 2 of step n and pass 1 of step n+1 run in one loop,
   // element by element (each reads and writes its own element only), except at the last step of
@@ -593,11 +398,14 @@ void System::run(long nsteps) {
   for (long step = 0; step < nsteps; ++step) {
     if (!first_done) {
       work = diss = 0;
-      runaway = -1;
-      ordered_sums<2>(
-          n, partial_sums_, {&work, &diss}, [&](long i, auto& s) __attribute__((always_inline)) {
-            first(i, s[0], s[1]);
-          });
+      const step::StepContext c = context();
+      auto first = [ c, fast ](long i, auto& s, auto& mark) __attribute__((always_inline)) {
+        by_class(
+            fast, *c.E, i, [&]<step::ElementClass C>() __attribute__((always_inline)) {
+              if (!step::first_element<C>(c, i, s[0], s[1])) mark[0] = i;
+            });
+      };
+      runaway = ordered_sums<2>(n, partial_sums_, {&work, &diss}, first)[0];
     }
     if (runaway >= 0) {
       const std::size_t i = static_cast<std::size_t>(runaway);
@@ -620,29 +428,43 @@ void System::run(long nsteps) {
     compute_forces(false, &timers, true);
     mark = Clock::now();
 
-    local = a_local > 0;
-    model_damping = sink_.has_damping();
-    net = respa_.on() ? &respa_ : nullptr;
-    w_net = respa_.net_weight(steps_);
-    bad = -1;
+    const step::StepContext c = context();
+    step::StepContext c2 = c;
+    c2.alpha = a_local;
+    c2.model_damping = sink_.has_damping();
+    c2.net = respa_.on() ? &respa_ : nullptr;
+    c2.w_net = respa_.net_weight(steps_);
+    auto second = [ c2, fast ](long i, auto& s, auto& mark) __attribute__((always_inline)) {
+      by_class(
+          fast, *c2.E, i, [&]<step::ElementClass C>() __attribute__((always_inline)) {
+            if (!step::second_element<C>(c2, i, s[0], s[1], s[2], s[3])) mark[1] = i;
+          });
+    };
+    // Pass 2 of this step and, where it succeeded, pass 1 of the next (with the context of pass
+    // 1, which has no local damping).
+    auto second_first =
+        [ c, c2, fast ](long i, auto& s, auto& mark) __attribute__((always_inline)) {
+      by_class(
+          fast, *c2.E, i, [&]<step::ElementClass C>() __attribute__((always_inline)) {
+            if (!step::second_element<C>(c2, i, s[0], s[1], s[2], s[3]))
+              mark[1] = i;
+            else if (!step::first_element<C>(c, i, s[4], s[5]))
+              mark[0] = i;
+          });
+    };
+    long bad = -1;
     // The books close only where an outer step does (the slow energy is held in between).
     const bool guard =
         respa_.closes_outer_step(steps_) && steps_ % settings_.guard_every < respa_.k();
     const bool fuse = !guard && step + 1 < nsteps;
     double kt = 0, kr = 0, work_next = 0, diss_next = 0;
     if (fuse) {
-      runaway = -1;
-      ordered_sums<6>(
-          n, partial_sums_, {&work, &diss, &kt, &kr, &work_next, &diss_next},
-          [&](long i, auto& s) __attribute__((always_inline)) {
-            if (second(i, s[0], s[1], s[2], s[3])) first(i, s[4], s[5]);
-          });
+      const auto marks = ordered_sums<6>(
+          n, partial_sums_, {&work, &diss, &kt, &kr, &work_next, &diss_next}, second_first);
+      runaway = marks[0];
+      bad = marks[1];
     } else {
-      ordered_sums<4>(
-          n, partial_sums_,
-          {&work, &diss, &kt, &kr}, [&](long i, auto& s) __attribute__((always_inline)) {
-            second(i, s[0], s[1], s[2], s[3]);
-          });
+      bad = ordered_sums<4>(n, partial_sums_, {&work, &diss, &kt, &kr}, second)[1];
     }
     if (bad >= 0) check_finite_forces();  // names the element and the cause
     if (bad >= 0)

@@ -88,6 +88,11 @@ struct IntegratorSettings {
   // as impulses, fast ones every step. [1, limits::kMaxRespaK]; 1 = off (plain velocity Verlet).
   // respa_k·dt must stay within safety × the slow models' critical step (else ConfigError).
   int respa_k = 1;
+  // Off: every element takes the integrator's general per-DOF kernels; on, elements with all six
+  // DOFs free and isotropic inertia take the same arithmetic compiled without the per-DOF
+  // branches (integrate/step_kernels.h). Results are bit for bit the same either way; tests
+  // compare the two. No spec field sets it.
+  bool free_isotropic_fast_path = true;
 };
 
 class System {
@@ -263,7 +268,13 @@ class System {
   ForceSink sink_;
   std::vector<Vec3> fd_, td_;  // damping force / torque (model dampers + local damping)
   std::vector<Vec3> f_prev_, t_prev_, fext_prev_, text_prev_;  // for work bookkeeping
-  std::vector<std::array<double, 6>> partial_sums_;  // per thread, for sums in a fixed order
+  // Per thread, for sums in a fixed order and the elements a pass flagged; a cache line each, so
+  // the threads' writes at the end of a pass do not contend for one line.
+  struct alignas(64) ThreadSlot {
+    std::array<double, 6> sum{};
+    std::array<long, 2> mark{-1, -1};
+  };
+  std::vector<ThreadSlot> partial_sums_;
   EnergyLedger ledger_;
   StepTimers timers_;
   double energy_scale_ = 0;  // energy in play, for relative errors
