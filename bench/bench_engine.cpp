@@ -251,6 +251,35 @@ void BM_SparseFilmSteps(benchmark::State& state) { issue13_steps(state, false); 
 BENCHMARK(BM_DenseFilmSteps)->Apply(one_and_two_threads)->Iterations(4);
 BENCHMARK(BM_SparseFilmSteps)->Apply(one_and_two_threads)->Iterations(6);
 
+// The integrator's pass alone (kicks, drift, local damping 0.2, kinetic energy, guard) on the
+// relaxed sparse film: both force models switched off, random velocities and spins (0.02 nm/ps and
+// rad/ps per component, the order of 300 K), so every element takes the free isotropic fast path
+// with the signs of a thermal film. integrate_ms and ns_per_element are the pass's (the timers'
+// integrate phase); the force phase is then only the sink's reduction.
+void BM_SparseFilmIntegrator(benchmark::State& state) {
+  System sys = issue13_system(relaxed_issue13_film(false), false, static_cast<int>(state.range(0)));
+  Elements& el = sys.elements();
+  std::mt19937_64 rng(13);
+  std::normal_distribution<double> g(0.0, 0.02);
+  for (std::size_t i = 0; i < el.size(); ++i) {
+    el.v[i] = Vec3(g(rng), g(rng), g(rng));
+    el.w[i] = Vec3(g(rng), g(rng), g(rng));
+  }
+  for (const auto& m : sys.models()) sys.set_model_active(m.get(), false);
+  sys.restart_clock();
+  sys.run(10);  // warm-up
+  const long steps0 = sys.steps();
+  const StepTimers t0 = sys.timers();
+  for (auto _ : state) sys.run(10);
+  const double steps = static_cast<double>(sys.steps() - steps0);
+  const double n = static_cast<double>(el.size());
+  add_phase_counters(state, t0, sys.timers(), steps);
+  state.counters["ns_per_element"] =
+      (sys.timers().integrate_s - t0.integrate_s) / (steps * n) * 1e9;
+  state.counters["elements"] = n;
+}
+BENCHMARK(BM_SparseFilmIntegrator)->Apply(one_and_two_threads)->Iterations(20);
+
 // The vdW pair model alone on a relaxed film: one force evaluation over its own neighbour list
 // (built for it, with its exclusion). ns_per_pair is per listed pair (within cutoff + skin);
 // ns_per_interacting_pair per pair within the cutoff (the others are rejected by distance).
