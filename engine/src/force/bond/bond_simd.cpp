@@ -27,16 +27,8 @@ using V = hn::Vec<D>;
 using DI = hn::RebindToSigned<D>;
 using VI = hn::Vec<DI>;
 
-struct V3 {
-  V x, y, z;
-};
-HWY_INLINE V3 operator+(const V3& a, const V3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-HWY_INLINE V3 operator-(const V3& a, const V3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-HWY_INLINE V3 operator*(V s, const V3& a) { return {s * a.x, s * a.y, s * a.z}; }
-HWY_INLINE V dot(const V3& a, const V3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-HWY_INLINE V3 cross(const V3& a, const V3& b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
+#include "force/bond/triple-inl.h"  // NOLINT: per target, inside HWY_NAMESPACE
+using V3 = Triple<V>;
 // Fields f, f + 1, f + 2 of a vector of bonds (f at base + f·kMaxLanes).
 HWY_INLINE V3 load3(D d, const double* base, int f) {
   return {hn::LoadU(d, base + f * kMaxLanes), hn::LoadU(d, base + (f + 1) * kMaxLanes),

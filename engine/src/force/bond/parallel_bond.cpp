@@ -27,17 +27,9 @@ void require_stiffness(double v, const char* field) {
 // in this long chain of small products the compiler spilled such halves to the stack and read
 // them back whole, a store-forwarding stall per quaternion rotation (perf: a quarter of the
 // kinematics' time). Same formulas, same order of the bonds: results differ at round-off only.
-struct P3 {
-  double x, y, z;
-};
+#include "force/bond/triple-inl.h"
+using P3 = Triple<double>;
 inline P3 p3(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
-inline P3 operator+(const P3& a, const P3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-inline P3 operator-(const P3& a, const P3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-inline P3 operator*(double s, const P3& a) { return {s * a.x, s * a.y, s * a.z}; }
-inline double dot(const P3& a, const P3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-inline P3 cross(const P3& a, const P3& b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
 
 // The rotation matrix of a unit quaternion, applied to two body-frame vectors: one matrix for
 // both (the bond point arm and the bond direction), no trigonometric call.
