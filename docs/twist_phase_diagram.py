@@ -5,8 +5,8 @@ Reads the twist jobs of one or more studies (`mdem study twist --vary length=...
 from an mdem results database and prints, per run, the aspect ratio gamma = L/R0 (L the tubes'
 length from the spec, R0 the rope's initial radius the job measured), the torque, the outcome and
 morphology at the end, when the rope first left the straight and spindle shapes (bird cage,
-helix or separated), beta, Q, R, and whether the run settled: bending energy within 5 % (or within 10 eV,
-a straight rope's noise) and Q constant over the last 100 ps. With --png it draws gamma against
+helix or separated), the e-folding time of beta while it grows from the noise, beta, Q, R, and whether the run settled: bending energy within 5 % (or within 10 eV,
+a straight rope's noise), beta within 0.5 deg and Q constant over the last 100 ps. With --png it draws gamma against
 torque with one symbol per end morphology, by gnuplot.
 
 Only the standard library is used (sqlite3); the picture needs gnuplot on the PATH.
@@ -15,6 +15,7 @@ Only the standard library is used (sqlite3); the picture needs gnuplot on the PA
 """
 import argparse
 import json
+import math
 import os
 import sqlite3
 import struct
@@ -27,6 +28,30 @@ NAMES = ["straight", "spindle", "bird cage", "helix", "separated"]  # morphology
 SETTLE_WINDOW_PS = 100.0
 SETTLE_REL = 0.05
 SETTLE_ABS_EV = 10.0
+SETTLE_BETA_DEG = 0.5
+GROWTH_BETA_DEG = (0.05, 2.0)  # the window of beta in which its growth is fitted as exponential
+GROWTH_MIN_SPAN_PS = 40.0
+
+
+def growth_time(series):
+    """e-folding time (ps) of the twist angle beta while it grows from the noise: a least-squares
+    line through ln(beta) over the frames with beta in GROWTH_BETA_DEG before it first leaves that
+    window upward; None when beta never spans GROWTH_MIN_SPAN_PS in the window or does not grow."""
+    pts = []
+    for r in series:
+        b = r["twist_angle_deg"]
+        if b > GROWTH_BETA_DEG[1]:
+            break
+        if b >= GROWTH_BETA_DEG[0]:
+            pts.append((r["time_ps"], math.log(b)))
+    if len(pts) < 5 or pts[-1][0] - pts[0][0] < GROWTH_MIN_SPAN_PS:
+        return None
+    n = len(pts)
+    mt = sum(t for t, _ in pts) / n
+    my = sum(y for _, y in pts) / n
+    sxx = sum((t - mt) ** 2 for t, _ in pts)
+    slope = sum((t - mt) * (y - my) for t, y in pts) / sxx
+    return 1.0 / slope if slope > 0 else None
 
 
 def frames(db, job_id, columns):
@@ -46,7 +71,8 @@ def frames(db, job_id, columns):
 
 
 def settled(series, end_ps):
-    """(bool, words): bending within 5 % (or 10 eV) and Q constant over the last 100 ps."""
+    """(bool, words): bending within 5 % (or 10 eV), beta within 0.5 deg and Q constant over the
+    last 100 ps."""
     if not series or end_ps - series[0]["time_ps"] < SETTLE_WINDOW_PS:
         return False, "too short"
     win = [r for r in series if r["time_ps"] >= end_ps - SETTLE_WINDOW_PS]
@@ -55,11 +81,15 @@ def settled(series, end_ps):
     spread = max(b) - min(b)
     ok_b = spread <= max(SETTLE_REL * max(abs(x) for x in b), SETTLE_ABS_EV)
     ok_q = len(q) == 1
-    if ok_b and ok_q:
+    be = [r["twist_angle_deg"] for r in win]
+    ok_beta = max(be) - min(be) <= SETTLE_BETA_DEG
+    if ok_b and ok_q and ok_beta:
         return True, "yes"
     why = []
     if not ok_b:
         why.append("bending %.3g to %.3g eV" % (min(b), max(b)))
+    if not ok_beta:
+        why.append("β %.1f to %.1f°" % (min(be), max(be)))
     if not ok_q:
         why.append("Q %d to %d" % (min(q), max(q)))
     return False, "no: " + ", ".join(why)
@@ -118,6 +148,7 @@ def describe(r):
     r["torsion_end"] = last["bond_torsion_eV"]
     r["bending_end"] = last["bond_bending_eV"]
     first = next((x["time_ps"] for x in series if x["morphology_code"] >= 1.5), None)
+    r["tau"] = growth_time(series)
     r["onset"] = None if first is None else first - ramp_end  # ps into the hold (negative: ramp)
     if r["outcome"] == "separated_by_over_twist":
         r["settled"] = "ended by the separation"
@@ -130,63 +161,72 @@ def describe(r):
 
 def markdown(table):
     print("| γ = L/R₀ | L (nm) | T (nN·nm) | state, end (ps) | outcome, morphology | cage/helix "
-          "from (ps into the hold) | β end (°) | Q end / max | R end (nm) | torsion peak → end, "
+          "from (ps into the hold) | β e-folding (ps) | β end (°) | Q end / max | R end (nm) | torsion peak → end, "
           "bending end (eV) | settled? | balance error | wall (s) |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in table:
         g = "%.2f" % r["gamma"] if r.get("gamma") else "?"
         if "end_ps" not in r:
-            print("| %s | %.2f | %g | %s | | | | | | | | | |" % (g, r["L"], r["T"], r["state"]))
+            print("| %s | %.2f | %g | %s | | | | | | | | | | |" % (g, r["L"], r["T"], r["state"]))
             continue
         onset = "—" if r["onset"] is None else "%.0f" % r["onset"]
+        tau = "—" if r["tau"] is None else "%.0f" % r["tau"]
         bal = "" if r.get("balance") is None else "%.1e" % r["balance"]
         wall = "" if r.get("wall_s") is None else "%.0f" % r["wall_s"]
-        print("| %s | %.2f | %g | %s, %.0f | %s, %s | %s | %.1f | %d / %d | %.2f | %.3g → %.3g, %.3g "
+        print("| %s | %.2f | %g | %s, %.0f | %s, %s | %s | %s | %.1f | %d / %d | %.2f | %.3g → %.3g, %.3g "
               "| %s | %s | %s |" % (g, r["L"], r["T"], r["state"], r["end_ps"], r["outcome"],
-                                    r["morph"], onset, r["beta"], r["Q"], r["Qmax"], r["R"],
+                                    r["morph"], onset, tau, r["beta"], r["Q"], r["Qmax"], r["R"],
                                     r["torsion_peak"], r["torsion_end"], r["bending_end"],
                                     r["settled"], bal, wall))
 
 
-def plot(table, png):
-    styles = {0: ("straight", 6, 0x808080), 1: ("spindle", 7, 0x3070c0),
-              2: ("bird cage", 9, 0xe07090), 3: ("helix", 5, 0x202020),
-              4: ("separated (over twist)", 3, 0xc03020)}
+def plot(table, png, title):
+    """gamma against torque, one symbol per end state (a separation over any morphology), a cross
+    over runs still changing at the end, the thesis's regions of Fig. 4-11 behind."""
+    styles = [("straight", 6, 0x808080), ("spindle", 7, 0x3070c0), ("bird cage", 9, 0xe07090),
+              ("helix", 5, 0x202020), ("separated by over twist", 3, 0xc03020)]
+    classes = [[] for _ in styles]
+    unsettled, unfinished = [], []
+    for r in table:
+        if not r.get("gamma"):
+            continue
+        if r["state"] != "SUCCEEDED" or "code" not in r:
+            unfinished.append(r)
+            continue
+        c = 4 if r["outcome"] == "separated_by_over_twist" else r["code"]
+        classes[c].append(r)
+        if not r["settled"].startswith(("yes", "ended")):
+            unsettled.append(r)
     with tempfile.TemporaryDirectory() as d:
-        dat = os.path.join(d, "p.dat")
-        with open(dat, "w") as f:
-            for code in range(5):
-                f.write("# %s\n" % styles[code][0])
-                for r in table:
-                    if r.get("code") == code and r.get("gamma"):
-                        f.write("%g %g\n" % (r["gamma"], r["T"]))
-                f.write("\n\n")
-            f.write("# not run / running\n")
-            for r in table:
-                if r.get("gamma") and r.get("state") not in ("SUCCEEDED",):
+        series = []
+        for i, (name, pt, col) in enumerate(styles):
+            series.append((classes[i], 'pt %d ps 2.2 lc rgb "#%06x"' % (pt, col), name))
+        series.append((unsettled, 'pt 2 ps 3.2 lc rgb "#e0a000" lw 2', "still changing at the end"))
+        series.append((unfinished, 'pt 1 ps 2.5 lc rgb "#000000"', "not finished"))
+        parts = []
+        for i, (rows_, style, name) in enumerate(series):
+            if not rows_:
+                continue
+            dat = os.path.join(d, "p%d.dat" % i)
+            with open(dat, "w") as f:
+                for r in rows_:
                     f.write("%g %g\n" % (r["gamma"], r["T"]))
+            parts.append('"%s" using 1:2 with points %s title "%s"' % (dat, style, name))
         gp = os.path.join(d, "p.gp")
         with open(gp, "w") as f:
-            f.write('set terminal pngcairo size 900,620 font ",11"\nset output "%s"\n' % png)
+            f.write('set terminal pngcairo size 900,640 font ",11"\nset output "%s"\n' % png)
             f.write('set xlabel "aspect ratio γ = L/R_0"\nset ylabel "torque per grip element '
-                    '(nN·nm)"\nset logscale x\nset xrange [4:30]\nset yrange [20:90]\n'
-                    'set key outside right\nset grid\n'
-                    'set title "Twisted N = 4 rope, per-element load: morphology at the end"\n')
+                    '(nN·nm)"\nset logscale x\nset xrange [4:30]\nset yrange [20:95]\n'
+                    'set xtics (5, 8, 12, 16, 24)\nset key below horizontal\nset grid\n'
+                    'set title "%s"\n' % title)
             # The thesis's Fig. 4-11 regions, as its text states them.
-            f.write('set object 1 rect from 4,20 to 8,90 fc rgb "#ffd0dc" fs solid 0.5 '
+            f.write('set object 1 rect from 4,20 to 8,95 fc rgb "#ffd0dc" fs solid 0.5 '
                     'noborder behind\n')
             f.write('set object 2 rect from 8,20 to 15,85 fc rgb "#d0e8ff" fs solid 0.5 '
                     'noborder behind\n')
-            f.write('set label 1 "thesis: bird cage γ<8" at 4.3,87 font ",9"\n')
-            f.write('set label 2 "thesis: stable spindle ≤ 85" at 8.3,82 font ",9"\n')
-            f.write('set label 3 "thesis: helix γ>15" at 16,87 font ",9"\n')
-            parts = []
-            for code in range(5):
-                name, pt, col = styles[code]
-                parts.append('"%s" index %d using 1:2 with points pt %d ps 2.2 lc rgb "#%06x" '
-                             'title "%s"' % (dat, code, pt, col, name))
-            parts.append('"%s" index 5 using 1:2 with points pt 1 ps 2.5 lc rgb "#000000" '
-                         'title "not finished"' % dat)
+            f.write('set label 1 "thesis: bird cage" at 4.3,22 font ",9"\n')
+            f.write('set label 2 "thesis: stable spindle" at 8.4,22 font ",9"\n')
+            f.write('set label 3 "thesis: helix above T_c ∝ γ^{-0.36}" at 15.5,22 font ",9"\n')
             f.write("plot " + ", \\\n     ".join(parts) + "\n")
         subprocess.run(["gnuplot", gp], check=True)
 
@@ -197,6 +237,7 @@ def main():
     ap.add_argument("--db", default=os.environ.get("MDEM_DB",
                     os.path.expanduser("~/.local/share/mdem/results.db")))
     ap.add_argument("--png", help="draw the diagram into this PNG (gnuplot)")
+    ap.add_argument("--title", default="Twisted N = 4 rope, per-element load: state at the end")
     a = ap.parse_args()
     if not os.path.exists(a.db):
         sys.exit("--db: no file %s" % a.db)
@@ -205,7 +246,7 @@ def main():
     table.sort(key=lambda r: (r["L"], r["T"]))
     markdown(table)
     if a.png:
-        plot(table, a.png)
+        plot(table, a.png, a.title)
 
 
 if __name__ == "__main__":
