@@ -14,6 +14,7 @@
 #include <numeric>
 #include <random>
 
+#include "bench_support.h"
 #include "mdem/core/units.h"
 #include "mdem/force/bond/parallel_bond.h"
 #include "mdem/force/contact/anisotropic_vdw.h"
@@ -107,14 +108,8 @@ void run_steps(benchmark::State& state, Elements el, std::unique_ptr<ParallelBon
   sys.initialize();
   sys.run(steps_per_iteration);  // warm-up: buffers sized, first rebuilds done
   const std::size_t builds0 = sys.neighbors() ? sys.neighbors()->builds() : 0;
-  const long steps0 = sys.steps();
-  for (auto _ : state) sys.run(steps_per_iteration);
-  const double steps = static_cast<double>(sys.steps() - steps0);
-  const double n = static_cast<double>(sys.elements().size());
-  state.counters["element_steps_per_s"] =
-      benchmark::Counter(n * steps, benchmark::Counter::kIsRate);
+  const double steps = bench::timed_steps(state, sys, steps_per_iteration);
   state.counters["steps_per_s"] = benchmark::Counter(steps, benchmark::Counter::kIsRate);
-  state.counters["elements"] = n;
   state.counters["dt_fs"] = sys.dt() * 1e3;
   if (sys.neighbors()) {
     state.counters["pairs"] = static_cast<double>(sys.neighbors()->pair_count());
@@ -237,15 +232,10 @@ void issue13_steps(benchmark::State& state, bool dense) {
   const Elements& el = relaxed_issue13_film(dense);
   System sys = issue13_system(el, dense, static_cast<int>(state.range(0)));
   sys.run(10);  // warm-up
-  const long steps0 = sys.steps();
   const StepTimers t0 = sys.timers();
-  for (auto _ : state) sys.run(10);
-  const double steps = static_cast<double>(sys.steps() - steps0);
+  const double steps = bench::timed_steps(state, sys, 10);
   const double n = static_cast<double>(el.size());
-  state.counters["element_steps_per_s"] =
-      benchmark::Counter(n * steps, benchmark::Counter::kIsRate);
   add_phase_counters(state, t0, sys.timers(), steps);
-  state.counters["elements"] = n;
   state.counters["dt_fs"] = sys.dt() * 1e3;
   state.counters["pairs_per_element"] = static_cast<double>(sys.neighbors()->pair_count()) / n;
 }
@@ -271,15 +261,12 @@ void BM_SparseFilmIntegrator(benchmark::State& state) {
   for (const auto& m : sys.models()) sys.set_model_active(m.get(), false);
   sys.restart_clock();
   sys.run(10);  // warm-up
-  const long steps0 = sys.steps();
   const StepTimers t0 = sys.timers();
-  for (auto _ : state) sys.run(10);
-  const double steps = static_cast<double>(sys.steps() - steps0);
+  const double steps = bench::timed_steps(state, sys, 10);
   const double n = static_cast<double>(el.size());
   add_phase_counters(state, t0, sys.timers(), steps);
   state.counters["ns_per_element"] =
       (sys.timers().integrate_s - t0.integrate_s) / (steps * n) * 1e9;
-  state.counters["elements"] = n;
 }
 BENCHMARK(BM_SparseFilmIntegrator)->Apply(one_and_two_threads)->Iterations(20);
 
@@ -402,13 +389,7 @@ void twist_rope_steps(benchmark::State& state, IntegratorSettings set) {
   System& sys = job.system();
   sys.initialize();
   sys.run(48);
-  const long steps0 = sys.steps();
-  for (auto _ : state) sys.run(48);
-  const double steps = static_cast<double>(sys.steps() - steps0);
-  const double n = static_cast<double>(sys.elements().size());
-  state.counters["element_steps_per_s"] =
-      benchmark::Counter(n * steps, benchmark::Counter::kIsRate);
-  state.counters["elements"] = n;
+  bench::timed_steps(state, sys, 48);
   state.counters["pairs"] = static_cast<double>(sys.neighbors()->pair_count());
   state.counters["dt_fs"] = sys.dt() * 1e3;
   state.counters["outer_critical_fs"] = sys.critical_outer_dt() * 1e3;
@@ -564,14 +545,10 @@ void BM_MemoryOrderFilmSteps(benchmark::State& state) {
   sys.add(std::make_unique<AnisotropicVdw>());
   sys.initialize();
   sys.run(5);  // warm-up: buffers sized, the first reorder done
-  const long steps0 = sys.steps();
   const std::size_t builds0 = sys.neighbors()->builds(), reorders0 = sys.reorders();
   const StepTimers t0 = sys.timers();
-  for (auto _ : state) sys.run(10);
-  const double steps = static_cast<double>(sys.steps() - steps0);
+  const double steps = bench::timed_steps(state, sys, 10);
   const double n = static_cast<double>(sys.elements().size());
-  state.counters["element_steps_per_s"] =
-      benchmark::Counter(n * steps, benchmark::Counter::kIsRate);
   add_phase_counters(state, t0, sys.timers(), steps);
   state.counters["rebuilds_per_step"] =
       static_cast<double>(sys.neighbors()->builds() - builds0) / steps;

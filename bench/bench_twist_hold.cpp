@@ -7,6 +7,7 @@
 //   bench_twist_hold --benchmark_filter=TwistRopeHold
 #include <benchmark/benchmark.h>
 
+#include "bench_support.h"
 #include "mdem/core/units.h"
 #include "mdem/job/twist_job.h"
 
@@ -32,13 +33,7 @@ void BM_TwistRopeHold(benchmark::State& state) {
     state.SkipWithError("not in the hold");
     return;
   }
-  const long steps0 = sys.steps();
-  for (auto _ : state) sys.run(48);
-  const double steps = static_cast<double>(sys.steps() - steps0);
-  const double n = static_cast<double>(sys.elements().size());
-  state.counters["element_steps_per_s"] =
-      benchmark::Counter(n * steps, benchmark::Counter::kIsRate);
-  state.counters["elements"] = n;
+  bench::timed_steps(state, sys, 48);
 }
 BENCHMARK(BM_TwistRopeHold)
     ->ArgNames({"threads", "hold"})

@@ -1,0 +1,22 @@
+#pragma once
+// What the engine benchmarks share: the timed loop of steps and its rate counters.
+#include <benchmark/benchmark.h>
+
+#include "mdem/integrate/system.h"
+
+namespace mdem::bench {
+
+// Runs `per_iteration` steps of `sys` per benchmark iteration and sets the counters
+// element_steps_per_s and elements; returns the steps run in the timed loop.
+inline double timed_steps(benchmark::State& state, System& sys, long per_iteration) {
+  const long steps0 = sys.steps();
+  for (auto _ : state) sys.run(per_iteration);
+  const double steps = static_cast<double>(sys.steps() - steps0);
+  const double n = static_cast<double>(sys.elements().size());
+  state.counters["element_steps_per_s"] =
+      benchmark::Counter(n * steps, benchmark::Counter::kIsRate);
+  state.counters["elements"] = n;
+  return steps;
+}
+
+}  // namespace mdem::bench
