@@ -866,7 +866,10 @@ Summary TensileJob::summary() {
   if (spec_.mode == TensileMode::Cyclic && eps.size() > 2) {
     CycleSettings cs;
     cs.period = protocol_->period();
-    cs.t0 = protocol_->start_time();
+    // The sampler's first frame comes one step after the protocol's start (it records the
+    // evaluation before each of its calls): the cycles are counted from there, at most one step
+    // (dt << P) late. From the start itself, a test after a relaxation reported no cycle.
+    cs.t0 = std::max(protocol_->start_time(), sampler_->times().front());
     try {
       const auto cycles = analyse_cycles(sampler_->times(), eps, sig, cs);
       s.emplace_back("cycles_complete", static_cast<long>(cycles.size()));
