@@ -184,7 +184,11 @@ JobRunResult run_job(Job& job, const JobCadence& cadence, const JobObserver& obs
   const int stage_count = static_cast<int>(job.stages().size());
   while (Stage* st = job.current_stage()) {
     // Between stages (the first stage starts as it always did: initialized, step 0 reported).
-    if (obs.cancelled && job.stage_index() > 0 && !job.stage_begun() && obs.cancelled()) {
+    // A stage whose system the job has just rebuilt (the tensile job after its pre-relaxation)
+    // begins first: a cancel then takes effect at its step 0, where the system can be
+    // checkpointed; an uninitialized one cannot (Ctrl-C there failed the job instead).
+    if (obs.cancelled && job.stage_index() > 0 && !job.stage_begun() &&
+        st->system().initialized() && obs.cancelled()) {
       r.cancelled = true;
       r.steps = series_step(job);
       return r;
