@@ -38,28 +38,104 @@ struct TwistReport {
   Morphology morphology = Morphology::Straight;
 };
 
+// What ended a stage by over twist.
+enum class OverTwistRule {
+  None,
+  // A tube's kinetic energy rose by at least kUnresistedFraction of the work its grip loads did,
+  // over every window of kWindowChecks checks ending at kSustainChecks checks in a row: the work
+  // is no longer stored or dissipated but goes into the tube's motion.
+  UnresistedWork,
+  // The backstop: a grip element spins in the sense of its moment faster than
+  // TwistProtocol::spin_up_limit at kChecksInARow checks in a row.
+  SpinUp,
+};
+
+// The figures of the unresisted-work rule for one tube over its window (eV, ps).
+struct UnresistedTube {
+  int tube = -1;
+  double window_ps = 0;          // length of the window
+  double work = 0;               // work of the tube's grip loads over the window
+  double kinetic_rise = 0;       // rise of the tube's kinetic energy over the window
+  double kinetic = 0;            // the tube's kinetic energy now
+  double total_work = 0;         // work of its grip loads since the start of the stage
+  double rope_work = 0;          // work of all grip loads over the window
+  double rope_bending_rise = 0;  // rise of the rope's bending energy over the window
+};
+
 // The over-twist outcome (the thesis's "separation due to over twist"): the twist stage ends early,
-// results kept, when a grip element spins in the sense of its moment faster than
-// TwistProtocol::spin_up_limit at three checks in a row (every 10 steps) while the grips are
-// loaded: its tube has unwound or separated, and the held moment would spin it up until the run
-// guard stops the run.
+// results kept, when a tube stops storing the work of its grip loads while they are loaded (the
+// ramp, and the constant-moment hold). Every kCheckEvery steps it books, per tube, the work its
+// grip loads did since the last check (trapezoidal in the loads, exact in the displacements and
+// rotations, so exact under a held load) and the tube's kinetic energy (translation and rotation
+// of all its elements). It fires on the first of:
+//  - UnresistedWork: over a sliding window of kWindowChecks checks, the tube's kinetic energy rose
+//    by at least kUnresistedFraction of that work, the work was at least kMinWorkFraction of all
+//    the work its loads did so far, the rope's bending energy rose by less than the work of all
+//    grip loads over the window, and this held at kSustainChecks checks in a row. An elastic
+//    tube under a dead load turns its work half into stored energy at most half into motion (a
+//    travelling torsion wave splits it evenly; a rocking end converts less the smaller the
+//    rocking), and bending a buckling tube stores energy too; an unresisted one turns it all into
+//    motion, less the local damping (0.9 at damping 0.1), for as long as it is loaded. When a
+//    helix or bird cage forms, stored torsion turns into bending and motion without any work:
+//    a tube's kinetic energy can then rise faster than its work, but the rope's bending rises
+//    faster than all the work, which the bending clause excludes.
+//  - SpinUp (the backstop, the old check): a grip element spinning in the sense of its moment
+//    faster than TwistProtocol::spin_up_limit at kChecksInARow checks in a row.
+// Its state (the books, the window, the counters) is part of the checkpoint. The first call of
+// met() after construction or load only starts the books if none were loaded.
 class OverTwistSeparation final : public StopCriterion {
  public:
   static constexpr long kCheckEvery = 10;
   static constexpr int kChecksInARow = 3;
-  explicit OverTwistSeparation(std::shared_ptr<const TwistProtocol> protocol);
+  static constexpr int kWindowChecks = 32;   // ~5.8 ps at the (10,10) rope's 18.2 fs
+  static constexpr int kSustainChecks = 55;  // ~10 ps of checks in a row
+  static constexpr double kUnresistedFraction = 0.5;
+  static constexpr double kMinWorkFraction = 0.01;
+
+  // `el`: the job's elements (its tube count and grip elements size the books).
+  OverTwistSeparation(std::shared_ptr<const TwistProtocol> protocol, const Elements& el);
   bool met(const System& sys) override;
-  // When it separated (ps) and the grip element that spun up; empty while it has not.
+  // When it separated (ps) and by which rule; empty / None while it has not.
   std::optional<double> time() const { return time_; }
+  OverTwistRule rule() const { return rule_; }
+  // The tube that separated (-1 while none did).
+  int tube() const;
+  // The backstop's grip element (rule SpinUp).
   const SpunUpGrip& grip() const { return grip_; }
+  // The unresisted-work rule's figures at the separation (rule UnresistedWork), or, before it,
+  // of the tube with the largest kinetic rise over work at the last check.
+  const UnresistedTube& unresisted() const { return unresisted_; }
+  // Work of the grip loads on tube k since the start and its kinetic energy at the last check.
+  double tube_work(int k) const { return work_[static_cast<std::size_t>(k)]; }
+  double tube_kinetic(int k) const { return kinetic_[static_cast<std::size_t>(k)]; }
+  int tubes() const { return static_cast<int>(work_.size()); }
   void save_state(StateWriter& w) const override;
   void load_state(StateReader& r) override;
 
  private:
+  void book(const System& sys);  // work since the last check, kinetic energies now
+  bool unresisted_work(const System& sys, bool loaded);
+
   std::shared_ptr<const TwistProtocol> protocol_;
+  std::vector<std::size_t> grips_;  // grip a then grip b
+  // Backstop state.
   int in_a_row_ = 0;
-  std::optional<double> time_;
   SpunUpGrip grip_;
+  // Books: the grip elements' positions, orientations and loads at the last check; per tube the
+  // work since the start, the kinetic energy now, and the last kWindowChecks + 1 checks' work
+  // and kinetic energy (ring, slot-major); per tube the checks in a row the rule held.
+  bool started_ = false;
+  std::vector<Vec3> last_x_, last_f_, last_t_;
+  std::vector<Quat> last_q_;
+  std::vector<double> work_, kinetic_;
+  std::vector<double> ring_work_, ring_kinetic_;
+  std::vector<double> ring_bending_;  // the rope's bending energy, per slot
+  long checks_ = 0;  // checks booked (the ring's head is checks_ % (kWindowChecks + 1))
+  std::vector<int> held_;
+  UnresistedTube unresisted_;
+  // Outcome.
+  std::optional<double> time_;
+  OverTwistRule rule_ = OverTwistRule::None;
 };
 
 class TwistJob final : public Job {
