@@ -7,8 +7,9 @@
 // The scene: seven (10,10) tubes of 30 segments (a two-layer rope; one tube's Greenhill torque
 // 2π·B/L = 57 nN·nm with B = kn·I·T from model.md, L = 39.3 nm), 120 nN·nm on every grip element
 // (one end segment of each tube), ramped at 10 nN·nm/ps, held up to 200 ps, local damping 0.1,
-// 10 K of seeded noise. The tubes coil; one tube's grip spins up and the job ends at 88.5 ps, while
-// the same run driven by hand is stopped by the guard at 106.8 ps.
+// 10 K of seeded noise. The tubes coil and spin up: the unresisted-work rule ends the job at
+// 83.2 ps (the old spin-up rule alone did at 88.5 ps), while the same run driven by hand is stopped
+// by the guard at 106.8 ps.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
