@@ -94,8 +94,10 @@ void OverTwistSeparation::book(const System& sys) {
     if (started_) {
       const int k = el.tube[i];
       // Trapezoid in the loads (exact under a held load, second order on the ramp) times the
-      // displacement and the rotation since the last check (< pi: the backstop fires at 2.5 rad
-      // per check).
+      // displacement and the net rotation since the last check. The net rotation is the integral
+      // of ω only while the spin axis holds still and the turn stays below pi (10 steps at the
+      // backstop's 0.25 rad a step: 2.5 rad); a grip tumbling fast makes the books drift from
+      // the integrator's t_ext·ω (docs/twist.md), which the rule's window trend tolerates.
       const Vec3 dx = el.x[i] - last_x_[g];
       const Vec3 dphi = quat_log(el.q[i] * last_q_[g].conjugate());
       const double dw =
