@@ -13,6 +13,7 @@
 #include <memory>
 #include <numeric>
 #include <random>
+#include <tuple>
 
 #include "bench_support.h"
 #include "mdem/core/units.h"
@@ -455,9 +456,9 @@ BENCHMARK(BM_TwistRopeDashpot)
 // the pre-relaxation's local damping 0.7, velocities then zeroed). The film gains pairs as it
 // relaxes: ~19 listed pairs per segment ready to relax, ~27 once relaxed (pairs_per_element
 // reports this run's), so the relaxed rate is below the ready-to-relax one.
-const Elements& tensile_medium_film(bool nps, bool prerelaxed) {
-  auto make = [](bool with_nps, bool relax) {
-    TensileFilmSpec spec = TensileFilmSpec::of_size(FilmSize::Medium);
+const Elements& tensile_film(FilmSize size, bool nps, bool prerelaxed) {
+  auto make = [](FilmSize sz, bool with_nps, bool relax) {
+    TensileFilmSpec spec = TensileFilmSpec::of_size(sz);
     spec.seed = 13;
     spec.nanoparticles = with_nps ? 4000 : 0;
     Elements el;
@@ -474,19 +475,19 @@ const Elements& tensile_medium_film(bool nps, bool prerelaxed) {
     }
     return out;
   };
-  static std::map<std::pair<bool, bool>, Elements> cache;
-  auto it = cache.find({nps, prerelaxed});
+  static std::map<std::tuple<FilmSize, bool, bool>, Elements> cache;
+  auto it = cache.find({size, nps, prerelaxed});
   if (it == cache.end())
-    it = cache.emplace(std::pair{nps, prerelaxed}, make(nps, prerelaxed)).first;
+    it = cache.emplace(std::tuple{size, nps, prerelaxed}, make(size, nps, prerelaxed)).first;
   return it->second;
 }
 
-void BM_TensileMediumFilm(benchmark::State& state) {
-  const bool nps = state.range(1) != 0, prerelaxed = state.range(2) != 0;
-  Elements el = tensile_medium_film(nps, prerelaxed);
+// Full steps of a tensile film (the job's relax-stage system) on state.range(0) threads.
+void tensile_film_steps(benchmark::State& state, FilmSize size, bool nps, bool prerelaxed) {
+  Elements el = tensile_film(size, nps, prerelaxed);
   // The bonds' rest state is the generated film's: bonds made on it, reused on the relaxed one.
   Elements generated;
-  TensileFilmSpec spec = TensileFilmSpec::of_size(FilmSize::Medium);
+  TensileFilmSpec spec = TensileFilmSpec::of_size(size);
   spec.seed = 13;
   spec.nanoparticles = nps ? 4000 : 0;
   add_tensile_film(generated, spec);
@@ -507,12 +508,24 @@ void BM_TensileMediumFilm(benchmark::State& state) {
   state.counters["dt_fs"] = sys->dt() * 1e3;
   state.counters["pairs_per_element"] = static_cast<double>(sys->neighbors()->pair_count()) / n;
 }
+
+void BM_TensileMediumFilm(benchmark::State& state) {
+  tensile_film_steps(state, FilmSize::Medium, state.range(1) != 0, state.range(2) != 0);
+}
 BENCHMARK(BM_TensileMediumFilm)
     ->ArgNames({"threads", "nps", "state"})
     ->ArgsProduct({{1, 2}, {0, 1}, {0, 1}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond)
     ->Iterations(2);
+
+// Table 5-1's small film (200 tubes × 200 segments = 40 000 segments in 300 × 300 × 11 nm, seed
+// 13, no NPs), pre-relaxed as state:1 above, in the same system: the tensile film of issue 13's
+// threads target (2t/1t ≥ 1.85) at a size that relaxes in seconds. 20 steps per measurement.
+void BM_TensileSmallFilm(benchmark::State& state) {
+  tensile_film_steps(state, FilmSize::Small, false, true);
+}
+BENCHMARK(BM_TensileSmallFilm)->Apply(one_and_two_threads)->Iterations(4);
 
 // Memory order (issue 13 item 3): full steps of issue 13's films as generated, their elements in
 // the generator's order (tube after tube, segments in order along each; the tubes themselves lie

@@ -67,6 +67,10 @@ EnergyTally ForceSink::reduce(std::vector<Vec3>& f, std::vector<Vec3>& t, std::v
     }
   }
   zeroed_ = true;
+  return energy_total();
+}
+
+EnergyTally ForceSink::energy_total() const {
   EnergyTally total;
   for (const auto& e : energy_) total += e;
   return total;

@@ -242,7 +242,8 @@ void System::refresh_booking_work() {
   update_energy_scale();
 }
 
-void System::compute_forces(bool with_local_damping, StepTimers* timers, bool in_step) {
+void System::compute_forces(bool with_local_damping, StepTimers* timers, bool in_step,
+                            bool defer_sums) {
   Clock::time_point mark;
   if (timers) mark = Clock::now();
   update_pairs();
@@ -251,7 +252,9 @@ void System::compute_forces(bool with_local_damping, StepTimers* timers, bool in
   for (const auto& m : models_)
     if (respa_.inner(*m) && (inactive_.empty() || model_active(m.get())))
       m->compute(el_, pairs_.list_of(m.get()), sink_);
-  ledger_.potential = sink_.reduce(el_.f, el_.t, fd_, td_);
+  // Deferred: the caller's pass takes each element's sums (ForceSink::take), the energies now.
+  sums_deferred_ = defer_sums && !respa_.on();
+  ledger_.potential = sums_deferred_ ? sink_.energy_total() : sink_.reduce(el_.f, el_.t, fd_, td_);
   if (respa_.on()) add_slow_forces(in_step);
   if (timers) lap(mark, timers->pair_s);
 
@@ -425,7 +428,7 @@ void System::run(long nsteps) {
     lap(mark, timers.integrate_s);
     for (auto& u : updaters_) u->apply(*this, time_);
     lap(mark, timers.updaters_s);
-    compute_forces(false, &timers, true);
+    compute_forces(false, &timers, true, true);
     mark = Clock::now();
 
     const step::StepContext c = context();
@@ -434,6 +437,7 @@ void System::run(long nsteps) {
     c2.model_damping = sink_.has_damping();
     c2.net = respa_.on() ? &respa_ : nullptr;
     c2.w_net = respa_.net_weight(steps_);
+    c2.sink = sums_deferred_ ? &sink_ : nullptr;  // the pass takes the forces it kicks with
     auto second = [ c2, fast ](long i, auto& s, auto& mark) __attribute__((always_inline)) {
       by_class(
           fast, *c2.E, i, [&]<step::ElementClass C>() __attribute__((always_inline)) {
@@ -466,6 +470,7 @@ void System::run(long nsteps) {
     } else {
       bad = ordered_sums<4>(n, partial_sums_, {&work, &diss, &kt, &kr}, second)[1];
     }
+    if (c2.sink) sink_.taken();
     if (bad >= 0) check_finite_forces();  // names the element and the cause
     if (bad >= 0)
       throw NumericalError("non-finite velocity of " + describe(E, static_cast<std::size_t>(bad)) +

@@ -52,10 +52,36 @@ class ForceSink {
   // without an evaluation in between returns zero forces.
   EnergyTally reduce(std::vector<Vec3>& f, std::vector<Vec3>& t, std::vector<Vec3>& fd,
                      std::vector<Vec3>& td);
+  // reduce() one element at a time, for a caller's own pass over the elements (System::run takes
+  // the forces in its integrator pass, which saves the reduction's own parallel region and pass
+  // over memory): element i's sums over the threads, in thread order (bit for bit reduce()'s),
+  // into f, t, and *fd, *td when damping buffers exist; its buffer entries zeroed as read. After
+  // take() of every element, taken() records that the buffers are zero (without it, the next
+  // clear() zeroes them again); energy_total() is the summed energy tally, in thread order.
+  void take(std::size_t i, Vec3& f, Vec3& t, Vec3* fd, Vec3* td) {
+    const int nt = threads();
+    take_one(force_, i, nt, f);
+    take_one(torque_, i, nt, t);
+    if (!damp_force_.empty()) {
+      take_one(damp_force_, i, nt, *fd);
+      take_one(damp_torque_, i, nt, *td);
+    }
+  }
+  void taken() { zeroed_ = true; }
+  EnergyTally energy_total() const;
   // Bytes its buffers hold (capacities, every thread's).
   std::size_t memory_bytes() const;
 
  private:
+  static void take_one(std::vector<std::vector<Vec3>>& b, std::size_t i, int nt, Vec3& out) {
+    Vec3 sum = b[0][i];
+    b[0][i].setZero();
+    for (int k = 1; k < nt; ++k) {
+      sum += b[k][i];
+      b[k][i].setZero();
+    }
+    out = sum;
+  }
   std::vector<std::vector<Vec3>> force_, torque_, damp_force_, damp_torque_;
   std::vector<EnergyTally> energy_;
   bool zeroed_ = true;  // every buffer entry is zero (after resize or reduce)

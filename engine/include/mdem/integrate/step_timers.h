@@ -9,9 +9,12 @@ namespace mdem {
 
 struct StepTimers {
   double pair_s = 0;       // the force evaluation: every model's forces, torques and energies
-                           // (bonds, pair kernels, walls, dampers) and the per-thread sums
+                           // (bonds, pair kernels, walls, dampers); the per-thread sums of a
+                           // step are taken in the integrator's pass (integrate_s), those of a
+                           // step under multiple time stepping here
   double neighbor_s = 0;   // neighbour-list checks and rebuilds
-  double integrate_s = 0;  // kicks, drift, local damping, kinetic energy, the run guard
+  double integrate_s = 0;  // kicks, drift, local damping, kinetic energy, the run guard (and
+                           // the per-thread force sums, ForceSink::take)
   double updaters_s = 0;   // protocols and every-step observers (System::add_updater)
   double total() const { return pair_s + neighbor_s + integrate_s + updaters_s; }
 };

@@ -237,8 +237,11 @@ class System {
   // timers, the neighbour-list update and the force evaluation are timed into them.
   // In a step (in_step), the slow models of multiple time stepping are evaluated only when the
   // evaluation closes an outer step; outside (initialize, refresh) always, for the energy books.
+  // defer_sums: leave the per-thread force sums in the sink for the caller's pass over the
+  // elements to take (ForceSink::take; sums_deferred_ says whether they were left: not under
+  // multiple time stepping, whose slow impulses are added to the summed forces).
   void compute_forces(bool with_local_damping = true, StepTimers* timers = nullptr,
-                      bool in_step = false);
+                      bool in_step = false, bool defer_sums = false);
   void add_slow_forces(bool in_step);
   // Memory order (system_order.cpp). update_pairs: the pair table's update, reordering the
   // elements along the curve of settings_.memory_order first when a sub-list is stale.
@@ -287,6 +290,7 @@ class System {
   bool initialized_ = false;
   bool dissipative_ = false;
   bool local_damping_was_on_ = false;  // fd_/td_ may hold local damping to clear
+  bool sums_deferred_ = false;         // the last compute_forces left the sums in sink_
 };
 
 }  // namespace mdem

@@ -342,7 +342,7 @@ void ParallelBond::compute_scalar(const Elements& el, ForceSink& sink) const {
     Vec3* f = sink.force(tid);
     Vec3* t = sink.torque(tid);
     BondTally tally;
-#pragma omp for schedule(static)
+#pragma omp for schedule(static) nowait
     for (std::size_t k = 0; k < nb; ++k) {
       const Bond& b = bonds_[k];
       const Loads l = loads(b.k, kinematics(b, x[b.i], q[b.i], dom.image(x[b.i], x[b.j]), q[b.j]));
@@ -423,7 +423,7 @@ void ParallelBond::compute_batched(const Elements& el, ForceSink& sink) const {
     Vec3* t = sink.torque(tid);
     BondTally tally;
     bond_simd::Out out;
-#pragma omp for schedule(static)
+#pragma omp for schedule(static) nowait
     for (long c = 0; c < chunks; ++c) {
       const std::size_t begin = static_cast<std::size_t>(c) * bond_simd::kChunk;
       const std::size_t count = std::min(bond_simd::kChunk, nb - begin);
