@@ -251,6 +251,7 @@ TEST(OverTwist, ImpossibleCheckpointStatesAreRefused) {
     double work = 1.0;
     std::size_t grips_written = 0;
     int unresisted_tube = -1;
+    double last_book_ps = 0;
     std::string field;
   };
   auto bytes = [&](const Bad& b) {
@@ -267,6 +268,7 @@ TEST(OverTwist, ImpossibleCheckpointStatesAreRefused) {
     w.put(1.0);
     w.put(b.checks > 0);
     w.put(b.checks);
+    w.put(b.last_book_ps);
     const std::size_t g = b.grips_written ? b.grips_written : grips;
     w.put(std::vector<Vec3>(g, Vec3::Zero()));
     w.put(std::vector<Quat>(g, Quat::Identity()));
@@ -289,7 +291,7 @@ TEST(OverTwist, ImpossibleCheckpointStatesAreRefused) {
     StateReader r(good);
     EXPECT_NO_THROW(ok.load_state(r));
   }
-  std::vector<Bad> bad(9);
+  std::vector<Bad> bad(11);
   bad[0].in_a_row = 7, bad[0].field = "checks in a row";
   bad[1].in_a_row = -1, bad[1].field = "checks in a row";
   bad[2].time = std::nan(""), bad[2].field = "checks in a row";
@@ -299,6 +301,8 @@ TEST(OverTwist, ImpossibleCheckpointStatesAreRefused) {
   bad[6].kinetic = -1, bad[6].field = "tube kinetic energy";
   bad[7].work = std::numeric_limits<double>::infinity(), bad[7].field = "tube work";
   bad[8].grips_written = grips + 1, bad[8].field = "grip positions";
+  bad[9].last_book_ps = std::nan(""), bad[9].field = "last booking time";
+  bad[10].last_book_ps = -1, bad[10].field = "last booking time";
   for (const Bad& b : bad) {
     OverTwistSeparation c(std::make_shared<TwistProtocol>(job.protocol()), job.system().elements());
     const std::string in = bytes(b);

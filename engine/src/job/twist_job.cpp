@@ -124,6 +124,7 @@ void OverTwistSeparation::book(const System& sys) {
       sys.energy().potential.stored[static_cast<int>(EnergyTerm::BondBending)];
   ++checks_;
   started_ = true;
+  last_book_ps_ = sys.time();
 }
 
 bool OverTwistSeparation::unresisted_work(const System& sys, bool loaded) {
@@ -134,7 +135,8 @@ bool OverTwistSeparation::unresisted_work(const System& sys, bool loaded) {
   const std::size_t t = work_.size();
   // The oldest slot of the ring: the check kWindowChecks checks ago.
   const std::size_t then = static_cast<std::size_t>(checks_ % (kWindowChecks + 1)) * t;
-  const double window = kWindowChecks * kCheckEvery * sys.dt();
+  const double check_ps = kCheckEvery * sys.dt();
+  const double window = kWindowChecks * std::ceil(kBookEveryPs / check_ps - 1e-9) * check_ps;
   const std::size_t slot = static_cast<std::size_t>(checks_ % (kWindowChecks + 1));
   const std::size_t now = (slot + kWindowChecks) % (kWindowChecks + 1);
   const double bending_rise = ring_bending_[now] - ring_bending_[slot];
@@ -178,8 +180,9 @@ bool OverTwistSeparation::met(const System& sys) {
   const bool loaded =
       p == TwistPhase::Loading ||
       (p == TwistPhase::Holding && protocol_->loading().boundary == TwistBoundary::ConstantMoment);
-  book(sys);
-  if (unresisted_work(sys, loaded)) {
+  const bool due = !started_ || sys.time() >= last_book_ps_ + kBookEveryPs - 1e-9;
+  if (due) book(sys);
+  if (due && unresisted_work(sys, loaded)) {
     time_ = sys.time();
     rule_ = OverTwistRule::UnresistedWork;
     return true;
@@ -206,6 +209,7 @@ void OverTwistSeparation::save_state(StateWriter& w) const {
   w.put(grip_.spin);
   w.put(started_);
   w.put(checks_);
+  w.put(last_book_ps_);
   w.put(last_x_);
   w.put(last_q_);
   w.put(last_f_);
@@ -249,6 +253,10 @@ void OverTwistSeparation::load_state(StateReader& r) {
   rule_ = rule;
   started_ = r.get_bool("started");
   checks_ = r.get<long>("checks");
+  last_book_ps_ = r.get<double>("last booking time");
+  if (!std::isfinite(last_book_ps_) || last_book_ps_ < 0)
+    r.fail("last booking time",
+           "holds " + std::to_string(last_book_ps_) + " ps (allowed: a finite time >= 0)");
   if (checks_ < 0 || (checks_ > 0) != started_)
     r.fail("checks", "holds " + std::to_string(checks_) + " checks for books that are " +
                          (started_ ? "started" : "not started") + " (allowed: >= 0, 0 iff not)");

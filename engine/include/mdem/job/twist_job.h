@@ -91,6 +91,12 @@ class OverTwistSeparation final : public StopCriterion {
   static constexpr int kSustainChecks = 55;  // ~10 ps of checks in a row
   static constexpr double kUnresistedFraction = 0.5;
   static constexpr double kMinWorkFraction = 0.01;
+  // The rule books at the first check at least this long after its last booking, so that its
+  // window (kWindowChecks bookings, ~5.8 ps) and its sustain (kSustainChecks, ~10 ps) are times
+  // of the rope's motion (a torsion wave's transit, a rocking period), not of the step: at the
+  // ropes' 18.2 fs it books every check; a run at 0.3 fs (bonds 10^4 times stiffer) books every
+  // 57th, where a window of 32 checks would span 0.1 ps of a ramp's start.
+  static constexpr double kBookEveryPs = 0.18;
 
   // `el`: the job's elements (its tube count and grip elements size the books).
   OverTwistSeparation(std::shared_ptr<const TwistProtocol> protocol, const Elements& el);
@@ -130,7 +136,8 @@ class OverTwistSeparation final : public StopCriterion {
   std::vector<double> work_, kinetic_;
   std::vector<double> ring_work_, ring_kinetic_;
   std::vector<double> ring_bending_;  // the rope's bending energy, per slot
-  long checks_ = 0;  // checks booked (the ring's head is checks_ % (kWindowChecks + 1))
+  long checks_ = 0;          // checks booked (the ring's head is checks_ % (kWindowChecks + 1))
+  double last_book_ps_ = 0;  // time of the last booking
   std::vector<int> held_;
   UnresistedTube unresisted_;
   // Outcome.
