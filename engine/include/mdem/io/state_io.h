@@ -137,7 +137,8 @@ class StateReader {
 // 6: multiple time stepping: respa_k, and the slow models' energy held between outer steps.
 // 7: element arrays in tag order (tags first), then their memory order (memory_order.h).
 // 8: the twist protocol's grip hold (positions, or positions and spins).
-// 9: the over-twist check's books (per-tube work of the grip loads and kinetic energy, their window).
+// 9: the over-twist check's books (per-tube work of the grip loads and kinetic energy, their
+// window).
 inline constexpr std::uint32_t kCheckpointVersion = 9;
 
 // A part of a job that a run changes and a checkpoint must carry (a protocol, an observer, a
