@@ -202,6 +202,26 @@ TEST(OverTwist, ElasticallyHeldRopeNeverSeparatesOverALongHold) {
   EXPECT_NEAR(work, E.external_work, 1e-2 * E.external_work);
 }
 
+// Under the rigid grip the rope turns as a whole (a soft mode: the work of the ramp goes largely
+// into the tubes' motion about the rope axis), which is no separation: the unresisted-work rule
+// is for the per-element load only. Before it was limited so, it ended the README's 37-tube,
+// 20-segment rope "separated" 20 ps into its ramp at 1 nN·nm/ps; a 40 ps ramp to 40 nN·nm (still
+// a spindle, docs/twist.md) must complete.
+TEST(OverTwist, RigidGripRampIsNoSeparation) {
+  TwistJobSpec s;
+  s.rope.layers = 4;
+  s.rope.segments = 20;
+  s.loading.torque_max = units::nNnm(40.0);
+  s.loading.rate = units::nNnm(1.0);
+  s.loading.hold = 0;
+  ASSERT_EQ(s.loading.grip_load, GripLoad::RigidGrip);
+  TwistJob job(s, one_thread());
+  run_job(job, {5.0, 0}, JobObserver{});
+  EXPECT_FALSE(job.separation().time().has_value())
+      << "tube " << job.separation().tube() << " at " << *job.separation().time() << " ps";
+  EXPECT_NEAR(job.system().time(), job.duration(), job.system().dt());
+}
+
 // The new check's books are part of a checkpoint: a run saved a few picoseconds before the
 // separation, its process gone, resumes in a fresh job to the same separation, bit for bit.
 TEST(OverTwist, ResumedRunSeparatesAtTheSameStepWithTheSameFigures) {

@@ -182,7 +182,12 @@ bool OverTwistSeparation::met(const System& sys) {
       (p == TwistPhase::Holding && protocol_->loading().boundary == TwistBoundary::ConstantMoment);
   const bool due = !started_ || sys.time() >= last_book_ps_ + kBookEveryPs - 1e-9;
   if (due) book(sys);
-  if (due && unresisted_work(sys, loaded)) {
+  // The rule is for the per-element load, where each tube stores its own grip's work as
+  // torsion. Under the rigid grip the rope turns as a whole about its axis, a soft mode that
+  // turns much of the work into the tubes' motion in every ramp (the README's 37-tube rope at
+  // 20 nN·nm fired it), so there the spin-up backstop alone decides.
+  const bool per_element = protocol_->loading().grip_load == GripLoad::PerElement;
+  if (due && per_element && unresisted_work(sys, loaded)) {
     time_ = sys.time();
     rule_ = OverTwistRule::UnresistedWork;
     return true;
