@@ -286,7 +286,6 @@ TEST(OverTwist, ImpossibleCheckpointStatesAreRefused) {
     w.put(0);
     w.put(1.0);
     w.put(1.0);
-    w.put(b.checks > 0);
     w.put(b.checks);
     w.put(b.last_book_ps);
     const std::size_t g = b.grips_written ? b.grips_written : grips;

@@ -91,7 +91,7 @@ void OverTwistSeparation::book(const System& sys) {
   const Elements& el = sys.elements();
   for (std::size_t g = 0; g < grips_.size(); ++g) {
     const std::size_t i = grips_[g];
-    if (started_) {
+    if (checks_ > 0) {
       const int k = el.tube[i];
       // Trapezoid in the loads (exact under a held load, second order on the ramp) times the
       // displacement and the net rotation since the last check. The net rotation is the integral
@@ -123,7 +123,6 @@ void OverTwistSeparation::book(const System& sys) {
   ring_bending_[static_cast<std::size_t>(checks_ % (kWindowChecks + 1))] =
       sys.energy().potential.stored[static_cast<int>(EnergyTerm::BondBending)];
   ++checks_;
-  started_ = true;
   last_book_ps_ = sys.time();
 }
 
@@ -133,11 +132,11 @@ bool OverTwistSeparation::unresisted_work(const System& sys, bool loaded) {
     return false;
   }
   const std::size_t t = work_.size();
-  // The oldest slot of the ring: the check kWindowChecks checks ago.
-  const std::size_t then = static_cast<std::size_t>(checks_ % (kWindowChecks + 1)) * t;
   const double check_ps = kCheckEvery * sys.dt();
   const double window = kWindowChecks * std::ceil(kBookEveryPs / check_ps - 1e-9) * check_ps;
+  // The oldest slot of the ring (the booking kWindowChecks bookings ago) and its offset.
   const std::size_t slot = static_cast<std::size_t>(checks_ % (kWindowChecks + 1));
+  const std::size_t then = slot * t;
   const std::size_t now = (slot + kWindowChecks) % (kWindowChecks + 1);
   const double bending_rise = ring_bending_[now] - ring_bending_[slot];
   double rope_work = 0;
@@ -180,14 +179,15 @@ bool OverTwistSeparation::met(const System& sys) {
   const bool loaded =
       p == TwistPhase::Loading ||
       (p == TwistPhase::Holding && protocol_->loading().boundary == TwistBoundary::ConstantMoment);
-  const bool due = !started_ || sys.time() >= last_book_ps_ + kBookEveryPs - 1e-9;
-  if (due) book(sys);
   // The rule is for the per-element load, where each tube stores its own grip's work as
   // torsion. Under the rigid grip the rope turns as a whole about its axis, a soft mode that
   // turns much of the work into the tubes' motion in every ramp (the README's 37-tube rope at
-  // 20 nN·nm fired it), so there the spin-up backstop alone decides.
+  // 20 nN·nm fired it), so there the spin-up backstop alone decides and nothing is booked.
   const bool per_element = protocol_->loading().grip_load == GripLoad::PerElement;
-  if (due && per_element && unresisted_work(sys, loaded)) {
+  const bool due =
+      per_element && (checks_ == 0 || sys.time() >= last_book_ps_ + kBookEveryPs - 1e-9);
+  if (due) book(sys);
+  if (due && unresisted_work(sys, loaded)) {
     time_ = sys.time();
     rule_ = OverTwistRule::UnresistedWork;
     return true;
@@ -212,7 +212,6 @@ void OverTwistSeparation::save_state(StateWriter& w) const {
   w.put(grip_.segment);
   w.put(grip_.moment);
   w.put(grip_.spin);
-  w.put(started_);
   w.put(checks_);
   w.put(last_book_ps_);
   w.put(last_x_);
@@ -256,15 +255,12 @@ void OverTwistSeparation::load_state(StateReader& r) {
                        "with one)");
   time_ = separated ? std::optional<double>(t) : std::nullopt;
   rule_ = rule;
-  started_ = r.get_bool("started");
   checks_ = r.get<long>("checks");
   last_book_ps_ = r.get<double>("last booking time");
   if (!std::isfinite(last_book_ps_) || last_book_ps_ < 0)
     r.fail("last booking time",
            "holds " + std::to_string(last_book_ps_) + " ps (allowed: a finite time >= 0)");
-  if (checks_ < 0 || (checks_ > 0) != started_)
-    r.fail("checks", "holds " + std::to_string(checks_) + " checks for books that are " +
-                         (started_ ? "started" : "not started") + " (allowed: >= 0, 0 iff not)");
+  if (checks_ < 0) r.fail("checks", "holds " + std::to_string(checks_) + " checks (allowed: >= 0)");
   const std::size_t n = grips_.size(), nt = work_.size(), ring = nt * (kWindowChecks + 1);
   r.get(last_x_, "grip positions", n);
   r.get(last_q_, "grip orientations", n);

@@ -130,7 +130,6 @@ class OverTwistSeparation final : public StopCriterion {
   // Books: the grip elements' positions, orientations and loads at the last check; per tube the
   // work since the start, the kinetic energy now, and the last kWindowChecks + 1 checks' work
   // and kinetic energy (ring, slot-major); per tube the checks in a row the rule held.
-  bool started_ = false;
   std::vector<Vec3> last_x_, last_f_, last_t_;
   std::vector<Quat> last_q_;
   std::vector<double> work_, kinetic_;
