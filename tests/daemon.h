@@ -32,12 +32,9 @@ inline const char* kAliceToken = "alice-token-0123456789";
 inline const char* kBobToken = "bob-token-0123456789ab";
 inline const char* kRootToken = "root-token-0123456789ab";
 
+// A test's own directory (removed after a passing run, see ScratchDirs).
 inline fs::path fresh_dir(const std::string& name) {
-  const fs::path d =
-      fs::temp_directory_path() / ("mdemd-test-" + std::to_string(getpid()) + "-" + name);
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
+  return ScratchDirs::make("mdemd-test-" + std::to_string(getpid()) + "-" + name);
 }
 
 // Writes a file only its owner may read (mdemd refuses a token file others may read).

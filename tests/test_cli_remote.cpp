@@ -33,6 +33,7 @@
 #include "mdem/cli.h"
 #include "mdem/snapshot_proto.h"
 #include "mdem/v1/service.grpc.pb.h"
+#include "support.h"
 
 namespace {
 
@@ -47,25 +48,8 @@ using mdem::cli::StoreError;
 
 // ---- helpers ----------------------------------------------------------------------------------
 
-class TempDir {
- public:
-  TempDir() {
-    std::string tmpl = (fs::temp_directory_path() / "mdem-remote-test-XXXXXX").string();
-    path_ = mkdtemp(tmpl.data());
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-  std::string write(const std::string& name, const std::string& text) const {
-    std::ofstream(path_ / name) << text;
-    return file(name);
-  }
-
- private:
-  fs::path path_;
+struct TempDir : mdem::testing::TempDir {
+  TempDir() : mdem::testing::TempDir("mdem-remote-test") {}
 };
 
 std::string quote(const std::string& s) {

@@ -27,9 +27,10 @@ Result run(std::vector<std::string> args) {
   return mdem::testing::run_job("twist", std::move(args));
 }
 
+// One directory for the program's databases (removed after a passing run, see ScratchDirs).
 fs::path temp_dir() {
-  const fs::path d = fs::temp_directory_path() / ("mdem-cli-twist-" + std::to_string(getpid()));
-  fs::create_directories(d);
+  static const fs::path d =
+      mdem::testing::ScratchDirs::make("mdem-cli-twist-" + std::to_string(getpid()));
   return d;
 }
 
