@@ -7,7 +7,6 @@
 
 #include <climits>
 #include <cmath>
-#include <random>
 
 #include "mdem/core/cnt.h"
 #include "mdem/core/limits.h"
@@ -19,6 +18,7 @@
 #include "mdem/scene/tube_builder.h"
 #include "mdem/spec.h"
 #include "spec_support.h"
+#include "step_scenes.h"
 #include "support.h"
 
 using namespace mdem;
@@ -41,12 +41,7 @@ System two_tubes(const Scene& sc) {
   Elements el;
   add_straight_tube(el, Vec3::Zero(), Vec3::UnitX(), 12, 0);
   add_straight_tube(el, Vec3(0.4, 1.7, 0.0), Vec3(1, 0.05, 0).normalized(), 12, 1);
-  std::mt19937 rng(7);
-  std::normal_distribution<double> g(0.0, 0.03);  // nm/ps, rad/ps
-  for (std::size_t i = 0; i < el.size(); ++i) {
-    el.v[i] = Vec3(g(rng), g(rng), g(rng));
-    el.w[i] = Vec3(g(rng), g(rng), g(rng));
-  }
+  mdem::testing::thermal_kick(el, 7);
   auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
   IntegratorSettings s;
   s.dt = sc.dt;

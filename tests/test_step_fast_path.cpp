@@ -7,15 +7,14 @@
 
 #include <bit>
 #include <cstdint>
-#include <random>
 
 #include "mdem/core/cnt.h"
 #include "mdem/force/bond/parallel_bond.h"
 #include "mdem/force/contact/anisotropic_vdw.h"
 #include "mdem/force/damping/viscous_contact_damping.h"
 #include "mdem/integrate/system.h"
-#include "mdem/scene/film_builder.h"
 #include "mdem/scene/tube_builder.h"
+#include "step_scenes.h"
 
 using namespace mdem;
 
@@ -40,24 +39,13 @@ struct Marked {
 System mixed_scene(const Case& cs, bool fast, Marked& mk) {
   Elements el;
   if (cs.big) {
-    FilmSpec f;
-    f.side = 60;
-    f.thickness = 6;
-    f.tubes = 24;
-    f.segments_per_tube = 100;
-    f.seed = 5;
-    add_random_film(el, f);
+    mdem::testing::add_step_film(el);
   } else {
     add_straight_tube(el, Vec3::Zero(), Vec3::UnitX(), 12, 0);
     add_straight_tube(el, Vec3(0.4, 1.7, 0.0), Vec3(1, 0.05, 0).normalized(), 12, 1);
     add_straight_tube(el, Vec3(0.2, 0.85, 1.5), Vec3(1, -0.04, 0.02).normalized(), 12, 2);
   }
-  std::mt19937 rng(11);
-  std::normal_distribution<double> g(0.0, 0.03);  // nm/ps, rad/ps
-  for (std::size_t i = 0; i < el.size(); ++i) {
-    el.v[i] = Vec3(g(rng), g(rng), g(rng));
-    el.w[i] = Vec3(g(rng), g(rng), g(rng));
-  }
+  mdem::testing::thermal_kick(el, 11);
   mk = {0, 11, 17, 20, 30, 0};
   el.fix_all(mk.fixed);
   for (int k = 0; k < 6; ++k) el.dof[mk.prescribed][k] = DofMode::Prescribed;

@@ -7,14 +7,13 @@
 
 #include <bit>
 #include <cstdint>
-#include <random>
 
 #include "mdem/core/cnt.h"
 #include "mdem/force/bond/parallel_bond.h"
 #include "mdem/force/contact/anisotropic_vdw.h"
 #include "mdem/force/damping/viscous_contact_damping.h"
 #include "mdem/integrate/system.h"
-#include "mdem/scene/film_builder.h"
+#include "step_scenes.h"
 
 using namespace mdem;
 
@@ -24,19 +23,8 @@ namespace {
 // random velocities and spins; dashpots optional; no local damping.
 System film(int threads, bool dashpots) {
   Elements el;
-  FilmSpec f;
-  f.side = 60;
-  f.thickness = 6;
-  f.tubes = 24;
-  f.segments_per_tube = 100;
-  f.seed = 5;
-  add_random_film(el, f);
-  std::mt19937 rng(3);
-  std::normal_distribution<double> g(0.0, 0.03);  // nm/ps, rad/ps
-  for (std::size_t i = 0; i < el.size(); ++i) {
-    el.v[i] = Vec3(g(rng), g(rng), g(rng));
-    el.w[i] = Vec3(g(rng), g(rng), g(rng));
-  }
+  mdem::testing::add_step_film(el);
+  mdem::testing::thermal_kick(el, 3);
   auto bonds = ParallelBond::from_topology(el, BondType::Cnt, cnt_bond_stiffness());
   IntegratorSettings s;
   s.dt = 0.002;
