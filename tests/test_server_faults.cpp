@@ -377,7 +377,9 @@ TEST(ServerFaults, BadTlsCertificateOrKeyIsNamed) {
 
 TEST(ServerFaults, CheckpointPathThatIsADirectoryIsNamed) {
   DaemonProcess d(fresh_dir("ckpt-dir"), {"--checkpoint-every", "0.2"});
-  const std::string id = submit_ok(d, kAliceToken, "victim", small_spec(200));
+  // A job far longer than the wait for its first checkpoint: a 200 ps hold (~0.5 s) could end,
+  // and drop its checkpoint, between that wait and the kill (this test failed so once under -j2).
+  const std::string id = submit_ok(d, kAliceToken, "victim", small_spec(4000));
   const fs::path ckpt = kill_after_checkpoint(d, id);
   ASSERT_TRUE(fs::exists(ckpt));
   fs::remove(ckpt);
