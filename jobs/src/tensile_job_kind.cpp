@@ -116,6 +116,8 @@ JobKind tensile_job_kind() {
       {"yield_strain", T::Real, "%", "yield strain", 7, 4, false, true, 100},
       {"peak_stress_GPa", T::Real, "GPa", "peak stress", 7, 6, true, true},
       {"final_strain", T::Real, "%", "final strain", 7, 6, false, false, 100},
+      {"grip_bridging_pieces", T::Count, "", "pieces held by both grips", 7, 6, false, true},
+      {"grip_bridging_affine_modulus_GPa", T::Real, "GPa", "their affine modulus", 7, 4, false},
       {"tubes_in_tension_at_2pct", T::Real, "%", "tubes in tension at 2 %", 8, 3, false, true, 100},
       {"parents_in_tension_at_2pct", T::Real, "%", "parent tubes", 8, 3, false, false, 100},
       {"mid_width_shrinkage_end", T::Real, "%", "width shrinkage at the end", 8, 3, false, true,

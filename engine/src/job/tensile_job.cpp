@@ -22,6 +22,7 @@
 #include "mdem/observe/cycle_analysis.h"
 #include "mdem/observe/film_report.h"
 #include "mdem/observe/fragments.h"
+#include "mdem/observe/grip_bridges.h"
 #include "mdem/observe/grip_stress.h"
 #include "mdem/observe/pore_raster.h"
 #include "mdem/observe/stress_strain.h"
@@ -312,6 +313,10 @@ class TensileJob::TestTracker final : public Updater {
       half_slab_ = 0.05 * job_.spec_.film.side;  // |x − x_mid| < L/20
       window_ = Window2D{xl, xr, -0.5 * job_.spec_.film.side, 0.5 * job_.spec_.film.side};
       width0 = width(sys, 0);
+      if (!bonds(sys).bonds().empty())
+        bridges =
+            grip_bridges(el, left, right, axial_stiffness(sys),
+                         {p.loading().length, job_.spec_.film.side, job_.spec_.film.thickness});
       const AlignedPairCounts a = aligned(sys);
       start = {0,     a.thesis, a.registry_free, pores(sys, &window_).large, bending_energy(sys),
                width0};
@@ -353,6 +358,7 @@ class TensileJob::TestTracker final : public Updater {
     w.put(half_slab_);
     w.put(window_);
     w.put(width0);
+    w.put(bridges);
     w.put(start);
     w.put(t2_);
     w.put(static_cast<std::uint64_t>(next_strain_));
@@ -372,6 +378,7 @@ class TensileJob::TestTracker final : public Updater {
     half_slab_ = r.get<double>("half slab");
     window_ = r.get<Window2D>("window");
     width0 = r.get<double>("width0");
+    bridges = r.get<GripBridges>("grip bridges");
     start = r.get<StrainFrame>("start");
     t2_ = r.get<double>("t2");
     next_strain_ = static_cast<std::size_t>(r.get<std::uint64_t>("next strain"));
@@ -387,7 +394,10 @@ class TensileJob::TestTracker final : public Updater {
     tension = r.get<TubeTension>("tension");
   }
 
+  bool started() const { return started_; }
+
   double width0 = 0;
+  GripBridges bridges;  // the pieces both grips hold, at the test's start
   StrainFrame start;
   std::vector<StrainFrame> frames;
   std::vector<double> fragments, fragment_strains;
@@ -405,6 +415,12 @@ class TensileJob::TestTracker final : public Updater {
 
  private:
   const ParallelBond& bonds(const System& sys) const { return *sys.find<ParallelBond>(); }
+  // EA (eV/nm) of the film's tubes (one tube type): kn·A times the rest length (centre to bond
+  // point on either side) of the first bond.
+  double axial_stiffness(const System& sys) const {
+    const Bond& b = bonds(sys).bonds().front();
+    return b.k.kn_area * (b.ci.norm() + b.cj.norm());
+  }
 
   void accumulate_tension(const System& sys) {
     const Elements& el = sys.elements();
@@ -825,6 +841,10 @@ Summary TensileJob::summary() {
     s.emplace_back("relax_pores_gt200nm2_start", rf.front().pores_large);
     s.emplace_back("relax_pores_gt200nm2_end", rf.back().pores_large);
     s.emplace_back("relax_bending_share_end", rf.back().bending_share);
+  }
+  if (const TestTracker& tt = *test_tracker_; tt.started()) {
+    s.emplace_back("grip_bridging_pieces", static_cast<long>(tt.bridges.pieces));
+    s.emplace_back("grip_bridging_affine_modulus_GPa", tt.bridges.affine_modulus);
   }
   std::vector<double> eps = sampler_->strains(), sig = sampler_->stresses();
   if (spec_.mode == TensileMode::Monotonic && !eps.empty()) {

@@ -139,7 +139,8 @@ class StateReader {
 // 8: the twist protocol's grip hold (positions, or positions and spins).
 // 9: the over-twist check's books (per-tube work of the grip loads and kinetic energy, their
 // window).
-inline constexpr std::uint32_t kCheckpointVersion = 9;
+// 10: the tensile test's pieces held by both grips (count and affine modulus, at its start).
+inline constexpr std::uint32_t kCheckpointVersion = 10;
 
 // A part of a job that a run changes and a checkpoint must carry (a protocol, an observer, a
 // stage): it writes and reads its own state, so no job lists fields in a checkpoint by hand.
