@@ -266,7 +266,9 @@ void compare_on_film(const Domain& domain) {
     }
     // Internal forces: no net force; no net moment in an open domain (objectivity).
     EXPECT_LT(f_sum.norm(), 1e-12 * s.force * el.size());
-    if (!domain.any_periodic()) EXPECT_LT(l_sum.norm(), 1e-12 * s.torque * 30 * el.size());
+    if (!domain.any_periodic()) {
+      EXPECT_LT(l_sum.norm(), 1e-12 * s.torque * 30 * el.size());
+    }
     // Fixed order of the sums: the same bits on a second evaluation.
     EXPECT_EQ(evaluate(*batched, el, threads), got) << threads << " threads";
     std::printf("film (%s), %d threads: force %.3g, torque %.3g of the bond scale\n",

@@ -198,13 +198,17 @@ void expect_summary_declared_and_shown(const std::string& kind, const mdem::Repo
     // Line 0: in the JSON only (the accuracy line says the energy balance and dt); a count
     // whose negative value means none is not printed then.
     const bool none = f.none_if_negative && summary[f.key].get<double>() < 0;
-    if (f.line != 0 && !none)
+    if (f.line != 0 && !none) {
       EXPECT_NE(out.str().find(shown), std::string::npos) << shown << "\n" << out.str();
+    }
     // Types as declared.
-    if (f.type == SummaryField::Type::Label) EXPECT_TRUE(summary[f.key].is_string()) << f.key;
-    if (f.type == SummaryField::Type::Count)
+    if (f.type == SummaryField::Type::Label) {
+      EXPECT_TRUE(summary[f.key].is_string()) << f.key;
+    } else if (f.type == SummaryField::Type::Count) {
       EXPECT_TRUE(summary[f.key].is_number_integer()) << f.key;
-    if (f.type == SummaryField::Type::Real) EXPECT_TRUE(summary[f.key].is_number()) << f.key;
+    } else {
+      EXPECT_TRUE(summary[f.key].is_number()) << f.key;
+    }
   }
   // The energy balance is said once.
   const std::string text = out.str();
@@ -322,8 +326,12 @@ TEST(FlagHelp, RangesInTheHelpAreTheRangesValidationEnforces) {
       EXPECT_TRUE(refused(kind, flag, field, in->lo - step(in->lo))) << field;
       EXPECT_EQ(refused(kind, flag, field, in->hi), in->hi_open) << field << " at " << in->hi;
       EXPECT_TRUE(refused(kind, flag, field, in->hi + step(in->hi))) << field;
-      if (in->lo_open) EXPECT_FALSE(refused(kind, flag, field, in->lo + step(in->lo))) << field;
-      if (in->hi_open) EXPECT_FALSE(refused(kind, flag, field, in->hi - step(in->hi))) << field;
+      if (in->lo_open) {
+        EXPECT_FALSE(refused(kind, flag, field, in->lo + step(in->lo))) << field;
+      }
+      if (in->hi_open) {
+        EXPECT_FALSE(refused(kind, flag, field, in->hi - step(in->hi))) << field;
+      }
     }
     // Every numeric flag with a fixed range states it: run 5, twist 10, compression 10.
     EXPECT_GE(checked, kind.name == "twist" ? 15 : 14);

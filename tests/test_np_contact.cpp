@@ -40,13 +40,6 @@ void expect_rel(double actual, double expected, double rel, const std::string& w
   EXPECT_NEAR(actual, expected, rel * std::abs(expected)) << what;
 }
 
-// Each component to `rel` of the vector's norm (zero components included).
-void expect_vec(const Vec3& actual, const Vec3& expected, double rel, const std::string& what) {
-  const double scale = std::max(expected.norm(), 1e-300);
-  for (int a = 0; a < 3; ++a)
-    EXPECT_NEAR(actual[a], expected[a], rel * scale) << what << " component " << a;
-}
-
 Vec3 random_unit(std::mt19937_64& g) {
   std::normal_distribution<double> n;
   return Vec3(n(g), n(g), n(g)).normalized();

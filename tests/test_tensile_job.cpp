@@ -122,6 +122,10 @@ TEST(TensileJob, StagesRunInOrderAndEachReports) {
   // The curve ends at the target strain exactly (the stress there interpolated).
   EXPECT_NEAR(num(s, "final_strain"), 0.006, 1e-12);
   EXPECT_EQ(num(s, "segments"), 180);
+  // The pieces both grips hold, at most all of them, and a modulus only where there are some.
+  EXPECT_GE(num(s, "grip_bridging_pieces"), 0);
+  EXPECT_LE(num(s, "grip_bridging_pieces"), num(s, "pieces"));
+  EXPECT_EQ(num(s, "grip_bridging_pieces") > 0, num(s, "grip_bridging_affine_modulus_GPa") > 0);
   EXPECT_EQ(find(s, "np_deposit"), nullptr) << "no NPs: no deposit to name";
   // Stage codes in the frames: 0 pre-relax, 1 relax, 3 test, in that order.
   double last = 0;
@@ -537,7 +541,9 @@ TEST(TwoTubeAlignment, SceneGeometryOfSection37) {
       EXPECT_NEAR(distance_to_line(p, el.x[25], a.normalized()), 3.462, 1e-9);
       EXPECT_NEAR(distance_to_line(p, el.x[75], b.normalized()), 3.462, 1e-9);
     }
-    if (nps == 2) EXPECT_NEAR((el.x[100] + el.x[101]).norm(), 0, 1e-12);
+    if (nps == 2) {
+      EXPECT_NEAR((el.x[100] + el.x[101]).norm(), 0, 1e-12);
+    }
   }
   TwoTubeAlignmentSpec bad;
   bad.nanoparticles = 3;
