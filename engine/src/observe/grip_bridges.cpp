@@ -2,11 +2,10 @@
 
 #include <cmath>
 #include <cstdint>
-#include <limits>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 #include <string>
-#include <unordered_map>
 
 #include "mdem/core/elements.h"
 #include "mdem/core/units.h"
@@ -38,7 +37,7 @@ GripBridges grip_bridges(const Elements& el, std::span<const std::size_t> left,
   require_positive("the film length L0 (nm)", film.length);
   require_positive("the film width W (nm)", film.width);
   require_positive("the film thickness H (nm)", film.thickness);
-  std::unordered_map<std::int32_t, Piece> pieces;
+  std::map<std::int32_t, Piece> pieces;  // by id: the modulus summed in a fixed order
   auto mark = [&](std::span<const std::size_t> grip, bool is_left) {
     for (std::size_t i : grip) {
       if (i >= el.size())
