@@ -181,7 +181,9 @@ void full_disk_run(DaemonProcess& d, const std::function<void(bool)>& full, bool
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
   const JobInfo during = get(d, kRootToken, id);
   EXPECT_EQ(during.state(), mdem::v1::RUNNING);
-  if (frozen) EXPECT_EQ(during.step(), step0) << "the database took writes through the fault?";
+  if (frozen) {
+    EXPECT_EQ(during.step(), step0) << "the database took writes through the fault?";
+  }
   full(false);
   EXPECT_EQ(await_health(d, HealthCheckResponse::SERVING), HealthCheckResponse::SERVING);
   const JobInfo done = wait_finished(d, id, 120);
