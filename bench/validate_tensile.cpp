@@ -7,6 +7,9 @@
 //                               --side L --tubes N --segments S; --nps N --relax-ps T
 //                               --target E --rate R --ramp T --seed K --report-strains LIST
 //                               --report-times LIST --dt PS (fixed; default: picked per stage);
+//                               --psi X (dashpots), --local-damping X; --vdw-law pfc (the
+//                               thesis's literal Table 2-3: PFC torque, flip_blend 0) and
+//                               --flip-blend X (after it) for comparisons with the thesis;
 //                               cyclic with --cycles N --amplitude A --cyclic-rate R; prints the
 //                               summary and the wall time (bench/validate_tensile_films.sh runs
 //                               the validation set with it).
@@ -108,6 +111,19 @@ int film(const std::vector<std::string>& args, IntegratorSettings is) {
       spec.test_report_strains = list(v);
     else if (k == "--report-times")
       spec.relax_report_ps = list(v);
+    else if (k == "--vdw-law") {  // exact (default) or pfc: the thesis's literal Table 2-3
+      if (v == "pfc") {
+        spec.vdw_torque = VdwTorque::Pfc;
+        spec.vdw_flip_blend = 0;
+      } else if (v != "exact") {
+        throw std::invalid_argument("film: --vdw-law must be exact or pfc, got " + v);
+      }
+    } else if (k == "--flip-blend")  // after --vdw-law, to keep one of its settings apart
+      spec.vdw_flip_blend = std::stod(v);
+    else if (k == "--local-damping")
+      spec.local_damping = std::stod(v);
+    else if (k == "--psi")
+      spec.dashpot_ratio = std::stod(v);
     else if (k == "--dt")  // fixed for every stage (default: the job picks it per stage)
       is.dt = std::stod(v);
     else

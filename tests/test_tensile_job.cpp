@@ -464,6 +464,27 @@ TEST(TensileJob, SameSeedSameResultsOtherSeedOther) {
   EXPECT_NE(state_bytes(c.system()), state_bytes(d.system()));
 }
 
+// The vdW law of the spec is the one the job's system evaluates: the default energy-conserving
+// one, or the thesis's literal Table 2-3 (PFC torque, no flip blend) for comparisons.
+TEST(TensileJob, VdwLawOfTheSpecIsTheSystems) {
+  auto law = [](TensileJob&& job) {
+    for (const auto& m : job.system().models())
+      if (const auto* v = dynamic_cast<const AnisotropicVdw*>(m.get())) return v->params();
+    ADD_FAILURE() << "no CNT-CNT vdW model in the job's system";
+    return VdwParams{};
+  };
+  TensileJobSpec s = tiny_spec();
+  const VdwParams exact = law(TensileJob(s, one_thread()));
+  EXPECT_EQ(exact.torque, VdwTorque::Exact);
+  EXPECT_EQ(exact.flip_blend, VdwParams{}.flip_blend);
+  s.vdw_torque = VdwTorque::Pfc;
+  s.vdw_flip_blend = 0;
+  const VdwParams pfc = law(TensileJob(s, one_thread()));
+  EXPECT_EQ(pfc.torque, VdwTorque::Pfc);
+  EXPECT_EQ(pfc.flip_blend, 0.0);
+  EXPECT_EQ(pfc.epsilon, VdwParams{}.epsilon);  // the rest of the law unchanged
+}
+
 TEST(TensileJob, BadSpecsNameFieldAndRange) {
   auto bad = [](const std::function<void(TensileJobSpec&)>& edit, const std::string& field) {
     TensileJobSpec s = tiny_spec();
@@ -500,6 +521,10 @@ TEST(TensileJob, BadSpecsNameFieldAndRange) {
   bad([](TensileJobSpec& s) { s.relax_report_ps = {-1}; }, "relax_report_ps");
   bad([](TensileJobSpec& s) { s.relax_report_ps.assign(1001, 1.0); }, "relax_report_ps");
   bad([&](TensileJobSpec& s) { s.test_report_strains = {nan}; }, "test_report_strains");
+  bad([](TensileJobSpec& s) { s.vdw_flip_blend = -0.1; }, "vdw_flip_blend");
+  bad([](TensileJobSpec& s) { s.vdw_flip_blend = 0.6; }, "vdw_flip_blend");
+  bad([&](TensileJobSpec& s) { s.vdw_flip_blend = nan; }, "vdw_flip_blend");
+  bad([](TensileJobSpec& s) { s.vdw_torque = static_cast<VdwTorque>(7); }, "vdw_torque");
   EXPECT_THROW(np_deposit_from_name("later"), std::invalid_argument);
   EXPECT_EQ(np_deposit_from_name("before_relax"), NpDeposit::BeforeRelax);
   EXPECT_EQ(np_deposit_name(NpDeposit::AfterRelax), "after_relax");

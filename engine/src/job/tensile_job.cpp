@@ -33,7 +33,8 @@
 namespace mdem {
 
 std::unique_ptr<System> tensile_film_system(Elements el, const IntegratorSettings& settings,
-                                            double dashpot_ratio, const ParallelBond* rest) {
+                                            double dashpot_ratio, const ParallelBond* rest,
+                                            const VdwParams& vdw) {
   std::unique_ptr<ParallelBond> pb;
   if (rest) {
     pb = std::make_unique<ParallelBond>();
@@ -43,7 +44,7 @@ std::unique_ptr<System> tensile_film_system(Elements el, const IntegratorSetting
   }
   auto sys = std::make_unique<System>(std::move(el), settings);
   sys->add(std::move(pb));
-  sys->add(std::make_unique<AnisotropicVdw>());
+  sys->add(std::make_unique<AnisotropicVdw>(vdw));
   sys->add(std::make_unique<NpCntContact>());
   sys->add(std::make_unique<NpNpContact>());
   if (dashpot_ratio > 0) {
@@ -190,6 +191,9 @@ void TensileJobSpec::validate() const {
   check_range("grip_width", grip_width, 0, 0.5 * film.side, true);
   check_range("sample_every_ps", sample_every_ps, 0, 1e6, true);
   check_range("relax_count_every_ps", relax_count_every_ps, 0, 1e6, true);
+  check_range("vdw_flip_blend", vdw_flip_blend, 0, 0.5);
+  if (vdw_torque != VdwTorque::Exact && vdw_torque != VdwTorque::Pfc)
+    bad("vdw_torque", "Exact or Pfc", static_cast<double>(vdw_torque));
   if (temperature_k != 0) bad("temperature_k", "0 (the films start at rest)", temperature_k);
   const TensileProtocol check(loading_of(*this));  // rates, ramp, target, amplitude, period
   // Times and strains the run does not reach are simply not reported.
@@ -200,6 +204,13 @@ void TensileJobSpec::validate() const {
     bad("test_report_strains", "at most 1000 strains",
         static_cast<double>(test_report_strains.size()));
   for (double e : test_report_strains) check_range("test_report_strains", e, 0, 10);
+}
+
+VdwParams TensileJobSpec::vdw_params() const {
+  VdwParams p;
+  p.torque = vdw_torque;
+  p.flip_blend = vdw_flip_blend;
+  return p;
 }
 
 // What the job records outside its stages' observers: the pre-relaxations' outcomes. A part of
@@ -615,7 +626,8 @@ double TensileJob::pick_dt(const Elements& el, const ParallelBond* rest) const {
   if (!auto_dt_) return *settings_.dt;
   IntegratorSettings probe_settings = settings_;
   probe_settings.dt.reset();
-  const auto probe = tensile_film_system(el, probe_settings, spec_.dashpot_ratio, rest);
+  const auto probe =
+      tensile_film_system(el, probe_settings, spec_.dashpot_ratio, rest, spec_.vdw_params());
   probe->initialize();
   // With multiple time stepping the outer step respa_k·dt must also stay within safety × the
   // slow forces' own critical step (System::initialize refuses a given dt beyond it; the job
@@ -628,7 +640,8 @@ double TensileJob::pick_dt(const Elements& el, const ParallelBond* rest) const {
 
 void TensileJob::rebuild(Elements el, double dt, const ParallelBond* rest) {
   settings_.dt = dt;
-  sys_ = tensile_film_system(std::move(el), settings_, spec_.dashpot_ratio, rest);
+  sys_ =
+      tensile_film_system(std::move(el), settings_, spec_.dashpot_ratio, rest, spec_.vdw_params());
 }
 
 void TensileJob::build(Elements el) {
@@ -641,7 +654,8 @@ void TensileJob::build(Elements el) {
     settings_.dt = pick_dt(el, nullptr);
   }
   dt_start_ = *settings_.dt;
-  sys_ = tensile_film_system(std::move(el), settings_, spec_.dashpot_ratio);
+  sys_ = tensile_film_system(std::move(el), settings_, spec_.dashpot_ratio, nullptr,
+                             spec_.vdw_params());
 
   records_ = std::make_shared<Records>();
   protocol_ = std::make_shared<TensileProtocol>(loading_of(spec_));

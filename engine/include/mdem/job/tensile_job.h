@@ -31,6 +31,7 @@
 #include <string_view>
 #include <vector>
 
+#include "mdem/force/contact/anisotropic_vdw.h"
 #include "mdem/job/job.h"
 #include "mdem/job/prerelax_criterion.h"
 #include "mdem/protocol/tensile_protocol.h"
@@ -43,10 +44,12 @@ class ParallelBond;
 
 // The tensile job's force loop on `el`: intra-tube parallel bonds (their rest state `rest`'s
 // bonds when given, else el's configuration, from el.topology), the CNT–CNT, NP–CNT and NP–NP
-// contacts and, with dashpot_ratio ψ > 0, the dashpots of all three.
+// contacts (the CNT–CNT one with `vdw`'s parameters) and, with dashpot_ratio ψ > 0, the
+// dashpots of all three.
 std::unique_ptr<System> tensile_film_system(Elements el, const IntegratorSettings& settings,
                                             double dashpot_ratio,
-                                            const ParallelBond* rest = nullptr);
+                                            const ParallelBond* rest = nullptr,
+                                            const VdwParams& vdw = {});
 
 // When the NPs enter the film (tensile.md §3.2).
 enum class NpDeposit {
@@ -104,6 +107,13 @@ struct TensileJobSpec {
   // by a cyclic test; §3.5: 0, 2, 10, 20 %). The fraction of tubes in tension is taken
   // at 2 % when the test reaches it; fragments at 50, 100, 150, 200 % when reached.
   std::vector<double> test_report_strains = {0, 0.02, 0.1, 0.2};
+
+  // The CNT–CNT vdW law: the energy-conserving default (VdwTorque::Exact, flip_blend 0.2) or,
+  // for comparisons with the thesis, its literal Table 2-3 as run in PFC (VdwTorque::Pfc and
+  // flip_blend 0; model.md §4). Not in the proto: validate_tensile's --vdw-law sets it.
+  VdwTorque vdw_torque = VdwTorque::Exact;
+  double vdw_flip_blend = 0.2;  // in [0, 0.5]
+  VdwParams vdw_params() const;
 
   // Kelvin; only 0 is accepted (§6 #16: the thesis's films start at rest).
   double temperature_k = 0;
