@@ -7,9 +7,11 @@
 //                               --side L --tubes N --segments S; --nps N --relax-ps T
 //                               --target E --rate R --ramp T --seed K --report-strains LIST
 //                               --report-times LIST --dt PS (fixed; default: picked per stage);
-//                               --psi X (dashpots), --local-damping X; --vdw-law pfc (the
+//                               --psi X (dashpots), --dashpot-shear 1 (the thesis's shear
+//                               dashpot too), --local-damping X; --vdw-law pfc (the
 //                               thesis's literal Table 2-3: PFC torque, flip_blend 0) and
-//                               --flip-blend X (after it) for comparisons with the thesis;
+//                               --flip-blend X (after it) for comparisons with the thesis,
+//                               --guard-tolerance X (the literal law is not conservative);
 //                               cyclic with --cycles N --amplitude A --cyclic-rate R; prints the
 //                               summary and the wall time (bench/validate_tensile_films.sh runs
 //                               the validation set with it).
@@ -124,6 +126,10 @@ int film(const std::vector<std::string>& args, IntegratorSettings is) {
       spec.local_damping = std::stod(v);
     else if (k == "--psi")
       spec.dashpot_ratio = std::stod(v);
+    else if (k == "--dashpot-shear")  // 1: the thesis's shear dashpot too, 0: normal-only
+      spec.dashpot_shear = v == "1";
+    else if (k == "--guard-tolerance")  // the run guard's (a non-conservative law adds energy)
+      is.guard_energy_tolerance = std::stod(v);
     else if (k == "--dt")  // fixed for every stage (default: the job picks it per stage)
       is.dt = std::stod(v);
     else

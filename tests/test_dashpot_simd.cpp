@@ -109,6 +109,55 @@ TEST(DashpotSimd, RandomPairsEqualScalarKernel) {
   p.ratio = 0.7;
   p.stiffness = 3.5;
   EXPECT_LT(max_relative_difference(ContactDampingKernel(p), c, forced), kRoundOff);
+  // With the shear dashpot (the whole relative velocity).
+  p.shear = true;
+  const double shear = max_relative_difference(ContactDampingKernel(p), c, forced);
+  EXPECT_LT(shear, kRoundOff);
+  EXPECT_GT(forced, 18000);
+}
+
+// The shear dashpot against Eq. 33-34 by hand: two segments 2 nm apart along x (masses m and 2m),
+// moving apart along the centre line at 0.3 nm/ps and sliding across it at 0.4 nm/ps along y and
+// −0.1 along z. c = 2ψ√(m_eff k), m_eff = 2m/3; normal-only: F_2 = −c·0.3 x̂; with shear
+// F_2 = −c·(0.3, 0.4, −0.1); F_1 = −F_2 in both, and the dissipated power −F·v_rel < 0.
+TEST(DashpotShear, SlidingAcrossTheCentreLineIsDampedByHand) {
+  Elements el;
+  el.add(cnt_segment(Vec3::Zero(), Quat::Identity(), 0, 0));
+  el.add(cnt_segment(Vec3(2, 0, 0), Quat::Identity(), 1, 0));
+  const double m = el.mass[0];
+  el.mass[1] = 2 * m;
+  el.v[0] = Vec3(0.1, -0.2, 0.05);
+  const Vec3 u(0.3, 0.4, -0.1);
+  el.v[1] = el.v[0] + u;
+  ContactDampingParams p;
+  const double c = 2 * p.ratio * std::sqrt(2 * m / 3 * p.stiffness);
+  for (bool shear : {false, true}) {
+    p.shear = shear;
+    for (DashpotEvaluation e : {DashpotEvaluation::Scalar, DashpotEvaluation::Batched}) {
+      const ContactDampingKernel k(p, e);
+      Vec3 f1, f2;
+      if (e == DashpotEvaluation::Scalar) {
+        PairForces out;
+        ASSERT_TRUE(k.pair(el, 0, 1, Vec3(2, 0, 0), out));
+        f1 = out.f1;
+        f2 = out.f2;
+      } else {
+        PairBatch b;
+        b.n = 1;
+        b.i[0] = 0;
+        b.j[0] = 1;
+        b.dx[0] = 2;
+        b.dy[0] = b.dz[0] = 0;
+        k.batch(el, b);
+        f1 = Vec3(b.fx[0], b.fy[0], b.fz[0]);
+        f2 = -f1;
+      }
+      const Vec3 expected = shear ? Vec3(-c * u) : Vec3(-c * 0.3, 0, 0);
+      EXPECT_LT((f2 - expected).norm(), 1e-14 * c) << "shear " << shear;
+      EXPECT_EQ(f1, -f2);
+      EXPECT_LT(f2.dot(u), 0.0);
+    }
+  }
 }
 
 TEST(DashpotSimd, EveryInstructionSetEqualsScalarKernel) {
@@ -122,6 +171,10 @@ TEST(DashpotSimd, EveryInstructionSetEqualsScalarKernel) {
     int forced = 0;
     const double worst = max_relative_difference(k, c, forced);
     EXPECT_LT(worst, kRoundOff) << hwy::TargetName(target);
+    ContactDampingParams p;
+    p.shear = true;
+    EXPECT_LT(max_relative_difference(ContactDampingKernel(p), c, forced), kRoundOff)
+        << hwy::TargetName(target) << " with shear";
     std::printf("%s: largest relative difference %.3g\n", hwy::TargetName(target), worst);
   }
   hwy::SetSupportedTargetsForTest(0);
@@ -177,10 +230,12 @@ std::vector<Vec3> damping_forces(const ViscousContactDamping& m, const Elements&
   return fd;
 }
 
-void compare_on_film(const Domain& domain) {
+void compare_on_film(const Domain& domain, bool shear) {
   const Elements el = random_film(7, 40.0, 60, 30);  // 1800 segments, 2 threads from 4096 pairs
-  const ViscousContactDamping batched(ContactDampingParams{});
-  const ViscousContactDamping scalar(ContactDampingParams{}, DashpotEvaluation::Scalar);
+  ContactDampingParams p;
+  p.shear = shear;
+  const ViscousContactDamping batched(p);
+  const ViscousContactDamping scalar(p, DashpotEvaluation::Scalar);
   NeighborList nl(batched.cutoff(), 0.5, domain);
   nl.set_exclusion([&batched](const Elements& e, std::size_t i, std::size_t j) {
     return batched.excludes(e, i, j);
@@ -202,10 +257,11 @@ void compare_on_film(const Domain& domain) {
     }
     EXPECT_GT(scale, 0.0);
     EXPECT_LT(diff, kRoundOff * scale) << threads << " threads";
-    // A dashpot only dissipates, and its pair forces are equal and opposite along the centre line.
+    // A dashpot only dissipates, and its pair forces are equal and opposite (along the centre
+    // line without shear, so then they also keep the angular momentum).
     EXPECT_LT(power, 0.0);
     EXPECT_LT(f_sum.norm(), 1e-12 * scale * el.size());
-    if (!domain.any_periodic()) {
+    if (!domain.any_periodic() && !shear) {
       EXPECT_LT(m_sum.norm(), 1e-12 * scale * 40.0 * el.size());
     }
     // Fixed summation order: the same bits on a second evaluation.
@@ -214,8 +270,9 @@ void compare_on_film(const Domain& domain) {
 }
 
 TEST(DashpotSimd, FilmForcesEqualScalarKernel) {
-  compare_on_film(Domain{});
-  compare_on_film(Domain(Vec3(-20, -20, -50), Vec3(20, 20, 50), {true, true, false}));
+  compare_on_film(Domain{}, false);
+  compare_on_film(Domain{}, true);
+  compare_on_film(Domain(Vec3(-20, -20, -50), Vec3(20, 20, 50), {true, true, false}), false);
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include "mdem/core/cnt.h"
 #include "mdem/core/units.h"
 #include "mdem/force/bond/parallel_bond.h"
+#include "mdem/force/damping/viscous_contact_damping.h"
 #include "mdem/job/tensile_job.h"
 #include "mdem/observe/grip_stress.h"
 #include "mdem/scene/tube_builder.h"
@@ -464,25 +465,35 @@ TEST(TensileJob, SameSeedSameResultsOtherSeedOther) {
   EXPECT_NE(state_bytes(c.system()), state_bytes(d.system()));
 }
 
-// The vdW law of the spec is the one the job's system evaluates: the default energy-conserving
-// one, or the thesis's literal Table 2-3 (PFC torque, no flip blend) for comparisons.
-TEST(TensileJob, VdwLawOfTheSpecIsTheSystems) {
-  auto law = [](TensileJob&& job) {
-    for (const auto& m : job.system().models())
-      if (const auto* v = dynamic_cast<const AnisotropicVdw*>(m.get())) return v->params();
-    ADD_FAILURE() << "no CNT-CNT vdW model in the job's system";
-    return VdwParams{};
+// The laws of the spec are the ones the job's system evaluates: the default energy-conserving
+// vdW law and normal-only dashpot, or the thesis's literal Table 2-3 (PFC torque, no flip blend)
+// and shear dashpot, for comparisons.
+TEST(TensileJob, LawsOfTheSpecAreTheSystems) {
+  auto laws = [](TensileJob&& job) {
+    FilmLaws l;
+    int found = 0;
+    for (const auto& m : job.system().models()) {
+      if (const auto* v = dynamic_cast<const AnisotropicVdw*>(m.get()))
+        l.vdw = v->params(), ++found;
+      if (const auto* d = dynamic_cast<const ViscousContactDamping*>(m.get()))
+        l.dashpot_shear = d->params().shear, ++found;
+    }
+    EXPECT_EQ(found, 2) << "the job's system has one CNT-CNT vdW model and one CNT dashpot";
+    return l;
   };
   TensileJobSpec s = tiny_spec();
-  const VdwParams exact = law(TensileJob(s, one_thread()));
-  EXPECT_EQ(exact.torque, VdwTorque::Exact);
-  EXPECT_EQ(exact.flip_blend, VdwParams{}.flip_blend);
+  const FilmLaws exact = laws(TensileJob(s, one_thread()));
+  EXPECT_EQ(exact.vdw.torque, VdwTorque::Exact);
+  EXPECT_EQ(exact.vdw.flip_blend, VdwParams{}.flip_blend);
+  EXPECT_FALSE(exact.dashpot_shear);
   s.vdw_torque = VdwTorque::Pfc;
   s.vdw_flip_blend = 0;
-  const VdwParams pfc = law(TensileJob(s, one_thread()));
-  EXPECT_EQ(pfc.torque, VdwTorque::Pfc);
-  EXPECT_EQ(pfc.flip_blend, 0.0);
-  EXPECT_EQ(pfc.epsilon, VdwParams{}.epsilon);  // the rest of the law unchanged
+  s.dashpot_shear = true;
+  const FilmLaws thesis = laws(TensileJob(s, one_thread()));
+  EXPECT_EQ(thesis.vdw.torque, VdwTorque::Pfc);
+  EXPECT_EQ(thesis.vdw.flip_blend, 0.0);
+  EXPECT_EQ(thesis.vdw.epsilon, VdwParams{}.epsilon);  // the rest of the law unchanged
+  EXPECT_TRUE(thesis.dashpot_shear);
 }
 
 TEST(TensileJob, BadSpecsNameFieldAndRange) {

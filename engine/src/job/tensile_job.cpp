@@ -34,7 +34,7 @@ namespace mdem {
 
 std::unique_ptr<System> tensile_film_system(Elements el, const IntegratorSettings& settings,
                                             double dashpot_ratio, const ParallelBond* rest,
-                                            const VdwParams& vdw) {
+                                            const FilmLaws& laws) {
   std::unique_ptr<ParallelBond> pb;
   if (rest) {
     pb = std::make_unique<ParallelBond>();
@@ -44,12 +44,13 @@ std::unique_ptr<System> tensile_film_system(Elements el, const IntegratorSetting
   }
   auto sys = std::make_unique<System>(std::move(el), settings);
   sys->add(std::move(pb));
-  sys->add(std::make_unique<AnisotropicVdw>(vdw));
+  sys->add(std::make_unique<AnisotropicVdw>(laws.vdw));
   sys->add(std::make_unique<NpCntContact>());
   sys->add(std::make_unique<NpNpContact>());
   if (dashpot_ratio > 0) {
     ContactDampingParams d;
     d.ratio = dashpot_ratio;
+    d.shear = laws.dashpot_shear;
     sys->add(std::make_unique<ViscousContactDamping>(d));
     sys->add(std::make_unique<NpContactDamping>(np_cnt_dashpot(dashpot_ratio)));
     sys->add(std::make_unique<NpContactDamping>(np_np_dashpot(dashpot_ratio)));
@@ -206,11 +207,12 @@ void TensileJobSpec::validate() const {
   for (double e : test_report_strains) check_range("test_report_strains", e, 0, 10);
 }
 
-VdwParams TensileJobSpec::vdw_params() const {
-  VdwParams p;
-  p.torque = vdw_torque;
-  p.flip_blend = vdw_flip_blend;
-  return p;
+FilmLaws TensileJobSpec::laws() const {
+  FilmLaws l;
+  l.vdw.torque = vdw_torque;
+  l.vdw.flip_blend = vdw_flip_blend;
+  l.dashpot_shear = dashpot_shear;
+  return l;
 }
 
 // What the job records outside its stages' observers: the pre-relaxations' outcomes. A part of
@@ -627,7 +629,7 @@ double TensileJob::pick_dt(const Elements& el, const ParallelBond* rest) const {
   IntegratorSettings probe_settings = settings_;
   probe_settings.dt.reset();
   const auto probe =
-      tensile_film_system(el, probe_settings, spec_.dashpot_ratio, rest, spec_.vdw_params());
+      tensile_film_system(el, probe_settings, spec_.dashpot_ratio, rest, spec_.laws());
   probe->initialize();
   // With multiple time stepping the outer step respa_k·dt must also stay within safety × the
   // slow forces' own critical step (System::initialize refuses a given dt beyond it; the job
@@ -640,8 +642,7 @@ double TensileJob::pick_dt(const Elements& el, const ParallelBond* rest) const {
 
 void TensileJob::rebuild(Elements el, double dt, const ParallelBond* rest) {
   settings_.dt = dt;
-  sys_ =
-      tensile_film_system(std::move(el), settings_, spec_.dashpot_ratio, rest, spec_.vdw_params());
+  sys_ = tensile_film_system(std::move(el), settings_, spec_.dashpot_ratio, rest, spec_.laws());
 }
 
 void TensileJob::build(Elements el) {
@@ -654,8 +655,7 @@ void TensileJob::build(Elements el) {
     settings_.dt = pick_dt(el, nullptr);
   }
   dt_start_ = *settings_.dt;
-  sys_ = tensile_film_system(std::move(el), settings_, spec_.dashpot_ratio, nullptr,
-                             spec_.vdw_params());
+  sys_ = tensile_film_system(std::move(el), settings_, spec_.dashpot_ratio, nullptr, spec_.laws());
 
   records_ = std::make_shared<Records>();
   protocol_ = std::make_shared<TensileProtocol>(loading_of(spec_));

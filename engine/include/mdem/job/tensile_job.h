@@ -42,14 +42,20 @@ namespace mdem {
 class GripStressSampler;
 class ParallelBond;
 
+// The choices of law a comparison with the thesis may change (TensileJobSpec::laws()): the
+// CNT–CNT vdW law's parameters, and whether the CNT contact dashpot also damps shear.
+struct FilmLaws {
+  VdwParams vdw;
+  bool dashpot_shear = false;
+};
+
 // The tensile job's force loop on `el`: intra-tube parallel bonds (their rest state `rest`'s
 // bonds when given, else el's configuration, from el.topology), the CNT–CNT, NP–CNT and NP–NP
-// contacts (the CNT–CNT one with `vdw`'s parameters) and, with dashpot_ratio ψ > 0, the
-// dashpots of all three.
+// contacts and, with dashpot_ratio ψ > 0, the dashpots of all three, with `laws`.
 std::unique_ptr<System> tensile_film_system(Elements el, const IntegratorSettings& settings,
                                             double dashpot_ratio,
                                             const ParallelBond* rest = nullptr,
-                                            const VdwParams& vdw = {});
+                                            const FilmLaws& laws = {});
 
 // When the NPs enter the film (tensile.md §3.2).
 enum class NpDeposit {
@@ -108,12 +114,15 @@ struct TensileJobSpec {
   // at 2 % when the test reaches it; fragments at 50, 100, 150, 200 % when reached.
   std::vector<double> test_report_strains = {0, 0.02, 0.1, 0.2};
 
-  // The CNT–CNT vdW law: the energy-conserving default (VdwTorque::Exact, flip_blend 0.2) or,
-  // for comparisons with the thesis, its literal Table 2-3 as run in PFC (VdwTorque::Pfc and
-  // flip_blend 0; model.md §4). Not in the proto: validate_tensile's --vdw-law sets it.
+  // For comparisons with the thesis (not in the proto; validate_tensile's --vdw-law and
+  // --dashpot-shear set them): the CNT–CNT vdW law, the energy-conserving default
+  // (VdwTorque::Exact, flip_blend 0.2) or the thesis's literal Table 2-3 as run in PFC
+  // (VdwTorque::Pfc and flip_blend 0; model.md §4); and the CNT contact dashpot, normal-only
+  // (default) or with the thesis's shear part (Eq. 33–34, ContactDampingParams::shear).
   VdwTorque vdw_torque = VdwTorque::Exact;
   double vdw_flip_blend = 0.2;  // in [0, 0.5]
-  VdwParams vdw_params() const;
+  bool dashpot_shear = false;
+  FilmLaws laws() const;
 
   // Kelvin; only 0 is accepted (§6 #16: the thesis's films start at rest).
   double temperature_k = 0;

@@ -1,6 +1,7 @@
 // The vectorised CNT contact dashpot: the scalar kernel's force (viscous_contact_damping.cpp)
-// over lanes of pairs. One divide per lane serves 1/|r|² and 1/(m1 + m2):
-// q = 1/(|r|² (m1 + m2)), so (r·u)/|r|² · √(k m1 m2/(m1 + m2)) = (r·u) q √(k m1 m2 (m1 + m2)).
+// over lanes of pairs, normal-only or with the shear part. One divide per lane serves 1/|r|² and
+// 1/(m1 + m2): q = 1/(|r|² (m1 + m2)), so (r·u)/|r|² · √(k m1 m2/(m1 + m2)) = (r·u) q √(k m1 m2 (m1
+// + m2)).
 #include "force/damping/dashpot_simd.h"
 
 #undef HWY_TARGET_INCLUDE
@@ -16,7 +17,8 @@ namespace hn = hwy::HWY_NAMESPACE;
 using D = hn::ScalableTag<double>;
 using V = hn::Vec<D>;
 
-void Evaluate(double ratio, double stiffness, const Lanes& l, std::size_t n) {
+template <bool kShear>
+HWY_INLINE void Lanes8(double ratio, double stiffness, const Lanes& l, std::size_t n) {
   const D d;
   const V two_ratio = hn::Set(d, 2.0 * ratio), k = hn::Set(d, stiffness), zero = hn::Zero(d);
   for (std::size_t o = 0; o < n; o += hn::Lanes(d)) {
@@ -29,11 +31,25 @@ void Evaluate(double ratio, double stiffness, const Lanes& l, std::size_t n) {
     const V q = hn::Set(d, 1.0) / (r2 * msum);
     const V c = two_ratio * hn::Sqrt(k * m1 * m2 * msum);  // 2ψ√(k m_eff) · (m1 + m2)
     // r = 0: no centre line, no force (q is infinite there).
-    const V s = hn::IfThenZeroElse(hn::Eq(r2, zero), c * ru * q);
-    hn::StoreU(s * rx, d, l.fx + o);
-    hn::StoreU(s * ry, d, l.fy + o);
-    hn::StoreU(s * rz, d, l.fz + o);
+    if constexpr (kShear) {  // c q r² = 2ψ√(k m_eff)
+      const V s = hn::IfThenZeroElse(hn::Eq(r2, zero), c * q * r2);
+      hn::StoreU(s * ux, d, l.fx + o);
+      hn::StoreU(s * uy, d, l.fy + o);
+      hn::StoreU(s * uz, d, l.fz + o);
+    } else {
+      const V s = hn::IfThenZeroElse(hn::Eq(r2, zero), c * ru * q);
+      hn::StoreU(s * rx, d, l.fx + o);
+      hn::StoreU(s * ry, d, l.fy + o);
+      hn::StoreU(s * rz, d, l.fz + o);
+    }
   }
+}
+
+void Evaluate(double ratio, double stiffness, bool shear, const Lanes& l, std::size_t n) {
+  if (shear)
+    Lanes8<true>(ratio, stiffness, l, n);
+  else
+    Lanes8<false>(ratio, stiffness, l, n);
 }
 
 const char* TargetName() { return hwy::TargetName(HWY_TARGET); }
@@ -48,9 +64,9 @@ namespace mdem::dashpot_simd {
 HWY_EXPORT(Evaluate);
 HWY_EXPORT(TargetName);
 
-void evaluate(double ratio, double stiffness, const Lanes& l, std::size_t n) {
+void evaluate(double ratio, double stiffness, bool shear, const Lanes& l, std::size_t n) {
   static_assert(HWY_MAX_BYTES / sizeof(double) <= kMaxLanes);
-  HWY_DYNAMIC_DISPATCH(Evaluate)(ratio, stiffness, l, n);
+  HWY_DYNAMIC_DISPATCH(Evaluate)(ratio, stiffness, shear, l, n);
 }
 
 const char* target_name() { return HWY_DYNAMIC_DISPATCH(TargetName)(); }

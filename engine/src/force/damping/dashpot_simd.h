@@ -18,8 +18,9 @@ struct Lanes {
 constexpr std::size_t kMaxLanes = 8;
 
 // f = 2ψ√(k m1 m2/(m1 + m2)) (r·u) r / |r|² on lanes [0, n), n a multiple of kMaxLanes, with
-// ratio = ψ and stiffness = k; a lane with r = 0 gets zeros (no centre line), a NaN propagates.
-void evaluate(double ratio, double stiffness, const Lanes& l, std::size_t n);
+// ratio = ψ and stiffness = k, or with shear f = 2ψ√(k m1 m2/(m1 + m2)) u; a lane with r = 0
+// gets zeros (no centre line), a NaN propagates.
+void evaluate(double ratio, double stiffness, bool shear, const Lanes& l, std::size_t n);
 
 // The instruction set evaluate() runs on this CPU, e.g. "AVX3", "AVX2", "EMU128".
 const char* target_name();

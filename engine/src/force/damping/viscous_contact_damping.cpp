@@ -32,9 +32,14 @@ bool ContactDampingKernel::pair(const Elements& el, std::size_t i, std::size_t j
   const double r2 = d.squaredNorm();
   if (r2 >= p_.cutoff * p_.cutoff || r2 == 0) return false;
   // Along the centre line only: a rigid motion of the pair (translation or rotation) has no
-  // relative velocity along it, so it is not damped.
-  const Vec3 n = d / std::sqrt(r2);
-  out.f2 = -coefficient(el, i, j) * n.dot(el.v[j] - el.v[i]) * n;
+  // relative velocity along it, so it is not damped. With shear, the whole relative velocity.
+  const Vec3 u = el.v[j] - el.v[i];
+  if (p_.shear) {
+    out.f2 = -coefficient(el, i, j) * u;
+  } else {
+    const Vec3 n = d / std::sqrt(r2);
+    out.f2 = -coefficient(el, i, j) * n.dot(u) * n;
+  }
   out.f1 = -out.f2;
   return true;
 }
@@ -61,7 +66,7 @@ void ContactDampingKernel::batch(const Elements& el, PairBatch& b) const {
     m1[p] = m2[p] = 1.0;
   }
   const dashpot_simd::Lanes l{b.dx, b.dy, b.dz, ux, uy, uz, m1, m2, b.fx, b.fy, b.fz};
-  dashpot_simd::evaluate(p_.ratio, p_.stiffness, l, static_cast<std::size_t>(lanes));
+  dashpot_simd::evaluate(p_.ratio, p_.stiffness, p_.shear, l, static_cast<std::size_t>(lanes));
 }
 
 const char* contact_damping_simd_target() { return dashpot_simd::target_name(); }

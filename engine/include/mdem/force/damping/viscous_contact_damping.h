@@ -1,7 +1,9 @@
 #pragma once
 // Viscous dashpots in CNT–CNT vdW contacts (thesis Eq. 33–34, model.md §4): on every pair of the
 // vdW contact within the cutoff, a force −c·(n·v_rel)·n along the centre line n,
-// c = 2ψ√(m_eff k), m_eff the pair's reduced mass.
+// c = 2ψ√(m_eff k), m_eff the pair's reduced mass; with `shear`, also the thesis's shear dashpot
+// (c_s = c_n: both stiffnesses are 100 eV/nm², Eq. 34), so the force is −c·v_rel, v_rel the
+// relative centre velocity.
 //
 // The dashpot belongs to the vdW contact (pair_owner() "anisotropic_vdw"): it acts on exactly
 // that contact's CntSegment–CntSegment pairs, never on pairs of other kinds (a nanoparticle next
@@ -12,7 +14,9 @@
 // the relative velocity at a contact point the vdW reach of 5.4 nm makes lever arms that over-damp
 // every spin (unstable at the default step). A force along the centre line, as DPD's dissipative
 // force, leaves every rigid motion undamped and conserves linear and angular momentum; sliding
-// is still damped through the many pairs at oblique angles.
+// is still damped through the many pairs at oblique angles. The shear option is for comparisons
+// with the thesis on gripped films (the tensile job), where no body turns as a whole: it damps
+// sliding at a crossing directly, and conserves linear momentum but not angular momentum.
 #include "mdem/force/pair_driver.h"
 
 namespace mdem {
@@ -28,6 +32,9 @@ struct ContactDampingParams {
   double stiffness = 100.0;       // k (eV/nm²)
   double cutoff = 4 * 1.356;      // acts on pairs closer than this (nm): the vdW cutoff 4T
   int intra_tube_exclusion = 20;  // same meaning as VdwParams::intra_tube_exclusion
+  // Also damp the relative centre velocity across the centre line (the thesis's shear dashpot,
+  // c_s = c): the force is then −c·v_rel. Off by default (see above).
+  bool shear = false;
 };
 
 // The dashpot pair kernel (pair_driver.h).
