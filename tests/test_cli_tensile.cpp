@@ -69,7 +69,8 @@ TEST(CliTensile, FlagsSetTheSpecOverAFile) {
   std::ofstream(d.file("film.yaml")) << "tensile: {size: FILM_MEDIUM, nanoparticles: 100}\n";
   mdem::cli::FlagValues f = {
       {"--spec", d.file("film.yaml")}, {"--nps", "2000"},         {"--mode", "cyclic"},
-      {"--report-times", "0,10"},      {"--zero-velocities", ""}, {"--np-deposit", "before-relax"}};
+      {"--report-times", "0,10"},      {"--zero-velocities", ""}, {"--np-deposit", "before-relax"},
+      {"--dashpot-shear", ""}};
   const mdem::v1::JobSpec s = mdem::cli::spec_from_flags(*mdem::cli::find_spec_kind("tensile"), f);
   const mdem::v1::TensileSpec& t = s.tensile();
   EXPECT_DOUBLE_EQ(t.side_nm(), 500.0);  // the file's medium film
@@ -79,6 +80,7 @@ TEST(CliTensile, FlagsSetTheSpecOverAFile) {
   EXPECT_EQ(t.report_times_ps_size(), 2);
   EXPECT_TRUE(t.zero_velocities());
   EXPECT_EQ(t.np_deposit(), mdem::v1::BEFORE_RELAX);
+  EXPECT_TRUE(t.vdw_dashpot_shear());
 }
 
 TEST(CliTensile, BadValuesAreRefusedNamingFlagFieldAndRange) {

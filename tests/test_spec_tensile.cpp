@@ -9,7 +9,9 @@
 #include <string>
 #include <vector>
 
+#include "mdem/job/tensile_job.h"
 #include "mdem/spec.h"
+#include "mdem/spec_job.h"
 #include "spec_support.h"
 
 using google::protobuf::util::MessageDifferencer;
@@ -47,6 +49,8 @@ TEST(SpecTensileDefaults, EmptyTensileIsTheSmallFilmOfTable51) {
   EXPECT_DOUBLE_EQ(t.grip_width_nm(), 15.0);
   EXPECT_TRUE(t.has_zero_velocities());
   EXPECT_FALSE(t.zero_velocities());
+  EXPECT_TRUE(t.has_vdw_dashpot_shear());
+  EXPECT_FALSE(t.vdw_dashpot_shear());  // the engine's normal-only dashpot
   EXPECT_EQ(
       std::vector<double>(t.report_strains_percent().begin(), t.report_strains_percent().end()),
       (std::vector<double>{0, 2, 10, 20}));
@@ -239,6 +243,8 @@ TEST(SpecTensileValidate, WrongTypeIsRefusedByTheParserNamingTheField) {
   expect_one_error(json_errors(R"({"tensile":{"size":"small"}})"), "json", {"size"});
   expect_one_error(json_errors(R"({"tensile":{"zero_velocities":"yes"}})"), "json",
                    {"zero_velocities"});
+  expect_one_error(json_errors(R"({"tensile":{"vdw_dashpot_shear":1.5}})"), "json",
+                   {"vdw_dashpot_shear"});
   expect_one_error(json_errors(R"({"tensile":{"report_times_ps":["a"]}})"), "json",
                    {"report_times_ps"});
   expect_one_error(json_errors(R"({"tensile":{"strain_rate":1e-4}})"), "json", {"strain_rate"});
@@ -252,7 +258,7 @@ TEST(SpecTensileValidate, EdgesOfEachRangeAreAccepted) {
                "max_tilt_deg":0, "nanoparticles":0, "prerelax_max_ps":1e-9, "relax_ps":0,
                "vdw_damping_ratio":0, "local_damping":0.99, "target_strain_percent":300,
                "strain_rate_per_ps":0.01, "ramp_ps":1e-9, "grip_width_nm":19.99,
-               "zero_velocities":true}})",
+               "zero_velocities":true, "vdw_dashpot_shear":true}})",
           R"({"tensile":{"side_nm":2000, "thickness_nm":1e-6, "tubes":20, "segments_per_tube":100000,
                "max_tilt_deg":90, "prerelax_max_ps":10000, "relax_ps":1e6, "vdw_damping_ratio":1,
                "target_strain_percent":1e-9, "strain_rate_per_ps":1e-9, "ramp_ps":100000,
@@ -409,3 +415,15 @@ TEST(SpecTensileYaml, WrongValuesAreRefusedWithTheirField) {
 }
 
 }  // namespace
+
+// The spec's damping choices reach the engine's job spec (jobs/src/tensile_job_kind.cpp).
+TEST(SpecTensileJob, DampingChoicesReachTheEngine) {
+  const mdem::TensileJobSpec plain = mdem::tensile_job_spec(finalized_json(R"({"tensile":{}})"));
+  EXPECT_FALSE(plain.dashpot_shear);
+  EXPECT_DOUBLE_EQ(plain.dashpot_ratio, 0.03);
+  const mdem::TensileJobSpec thesis = mdem::tensile_job_spec(finalized_json(
+      R"({"tensile":{"vdw_dashpot_shear":true, "vdw_damping_ratio":0.05, "local_damping":0.2}})"));
+  EXPECT_TRUE(thesis.dashpot_shear);
+  EXPECT_DOUBLE_EQ(thesis.dashpot_ratio, 0.05);
+  EXPECT_DOUBLE_EQ(thesis.local_damping, 0.2);
+}

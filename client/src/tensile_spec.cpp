@@ -20,6 +20,7 @@ const FlagFields& tensile_flag_fields() {
       {"--relax", "tensile.relax_ps"},
       {"--damping-ratio", "tensile.vdw_damping_ratio"},
       {"--local-damping", "tensile.local_damping"},
+      {"--dashpot-shear", "tensile.vdw_dashpot_shear"},
       {"--mode", "tensile.mode"},
       {"--strain", "tensile.target_strain_percent"},
       {"--rate", "tensile.strain_rate_per_ps"},
@@ -71,6 +72,7 @@ void apply_tensile_flags(const FlagValues& f, v1::JobSpec& spec) {
   if (has("--relax")) t.set_relax_ps(num("--relax"));
   if (has("--damping-ratio")) t.set_vdw_damping_ratio(num("--damping-ratio"));
   if (has("--local-damping")) t.set_local_damping(num("--local-damping"));
+  if (has("--dashpot-shear")) t.set_vdw_dashpot_shear(true);
   if (has("--mode"))
     t.set_mode(choice<v1::TensileMode>("--mode", f.at("--mode"),
                                        {{"monotonic", v1::MONOTONIC}, {"cyclic", v1::CYCLIC}}));
@@ -147,6 +149,8 @@ std::string tensile_flags_help() {
                    default_of(d::kVdwDampingRatio)) +
          flag_help("--local-damping X", "PFC local damping", r::kLocalDamping,
                    default_of(d::kTensileLocalDamping)) +
+         "  --dashpot-shear      the CNT contact dashpot damps shear too, as the thesis's\n"
+         "                       (default: along the centre line only; docs/tensile.md)\n"
          "Loading:\n"
          "  --mode M             monotonic (default: ramp to a constant rate up to --strain) or\n"
          "                       cyclic (down to -amplitude and back, --cycles times)\n" +
@@ -221,8 +225,14 @@ std::string tensile_film_text(const v1::TensileSpec& t) {
 }
 
 SpecKind tensile_kind() {
-  return {"tensile",           v1::JobSpec::kTensile, tensile_flag_fields,  {"--zero-velocities"},
-          apply_tensile_flags, kTensileAbout,         tensile_flags_help(), describe_tensile,
+  return {"tensile",
+          v1::JobSpec::kTensile,
+          tensile_flag_fields,
+          {"--zero-velocities", "--dashpot-shear"},
+          apply_tensile_flags,
+          kTensileAbout,
+          tensile_flags_help(),
+          describe_tensile,
           building_tensile};
 }
 

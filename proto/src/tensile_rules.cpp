@@ -66,6 +66,7 @@ void default_tensile(Tensile& t) {
   if (!t.has_amplitude_percent()) t.set_amplitude_percent(d::kAmplitudePercent);
   if (!t.has_grip_width_nm()) t.set_grip_width_nm(d::kGripWidthNm);
   if (!t.has_zero_velocities()) t.set_zero_velocities(d::kZeroVelocities);
+  if (!t.has_vdw_dashpot_shear()) t.set_vdw_dashpot_shear(d::kVdwDashpotShear);
   if (t.mode() == mdem::v1::MONOTONIC)
     default_points(*t.mutable_report_strains_percent(), d::kReportStrainsPercent, target_of(t));
   default_points(*t.mutable_report_times_ps(), d::kReportTimesPs, relax_of(t));

@@ -91,6 +91,7 @@ inline constexpr int kCycles = 6;
 inline constexpr double kAmplitudePercent = 1.0;
 inline constexpr double kGripWidthNm = 15.0;
 inline constexpr bool kZeroVelocities = false;
+inline constexpr bool kVdwDashpotShear = false;
 inline constexpr double kReportStrainsPercent[] = {0.0, 2.0, 10.0, 20.0};
 inline constexpr double kReportTimesPs[] = {0.0, 1000.0, 2000.0, 3000.0, 4000.0, 4500.0};
 }  // namespace defaults
