@@ -1,7 +1,7 @@
 // The vectorised CNT contact dashpot: the scalar kernel's force (viscous_contact_damping.cpp)
 // over lanes of pairs, normal-only or with the shear part. One divide per lane serves 1/|r|² and
-// 1/(m1 + m2): q = 1/(|r|² (m1 + m2)), so (r·u)/|r|² · √(k m1 m2/(m1 + m2)) = (r·u) q √(k m1 m2 (m1
-// + m2)).
+// 1/(m1 + m2): q = 1/(|r|² (m1 + m2)), so
+// (r·u)/|r|² · √(k m1 m2/(m1 + m2)) = (r·u) q √(k m1 m2 (m1 + m2)).
 #include "force/damping/dashpot_simd.h"
 
 #undef HWY_TARGET_INCLUDE
@@ -18,7 +18,7 @@ using D = hn::ScalableTag<double>;
 using V = hn::Vec<D>;
 
 template <bool kShear>
-HWY_INLINE void Lanes8(double ratio, double stiffness, const Lanes& l, std::size_t n) {
+HWY_INLINE void EvaluateLanes(double ratio, double stiffness, const Lanes& l, std::size_t n) {
   const D d;
   const V two_ratio = hn::Set(d, 2.0 * ratio), k = hn::Set(d, stiffness), zero = hn::Zero(d);
   for (std::size_t o = 0; o < n; o += hn::Lanes(d)) {
@@ -47,9 +47,9 @@ HWY_INLINE void Lanes8(double ratio, double stiffness, const Lanes& l, std::size
 
 void Evaluate(double ratio, double stiffness, bool shear, const Lanes& l, std::size_t n) {
   if (shear)
-    Lanes8<true>(ratio, stiffness, l, n);
+    EvaluateLanes<true>(ratio, stiffness, l, n);
   else
-    Lanes8<false>(ratio, stiffness, l, n);
+    EvaluateLanes<false>(ratio, stiffness, l, n);
 }
 
 const char* TargetName() { return hwy::TargetName(HWY_TARGET); }
