@@ -2,7 +2,8 @@
 //
 //   validate_tensile two-tube   thesis Fig. 5-7 (tensile.md §3.7): t_align of two crossed
 //                               50-segment tubes with 0, 1 and 2 NPs in the acute wedges;
-//                               options --psi LIST (dashpot ratios, default 0.03) --max-ps T;
+//                               options --psi LIST (dashpot ratios, default 0.03) --max-ps T
+//                               --dashpot-shear 1 (the thesis's shear dashpot too);
 //   validate_tensile film       one tensile job on a film: --size small|medium|large or
 //                               --side L --tubes N --segments S; --nps N --relax-ps T
 //                               --target E --rate R --ramp T --seed K --report-strains LIST
@@ -49,11 +50,14 @@ std::vector<double> list(const std::string& s) {
 int two_tube(const std::vector<std::string>& args, IntegratorSettings is) {
   std::vector<double> psis = {0.03};
   double max_ps = 4000;
+  bool shear = false;
   for (std::size_t i = 0; i + 1 < args.size(); i += 2) {
     if (args[i] == "--psi")
       psis = list(args[i + 1]);
     else if (args[i] == "--max-ps")
       max_ps = std::stod(args[i + 1]);
+    else if (args[i] == "--dashpot-shear")
+      shear = args[i + 1] == "1";
     else
       throw std::invalid_argument("two-tube: unknown option " + args[i]);
   }
@@ -66,6 +70,7 @@ int two_tube(const std::vector<std::string>& args, IntegratorSettings is) {
       AlignmentSettings st;
       st.max_ps = max_ps;
       st.dashpot_ratio = psi;
+      st.dashpot_shear = shear;
       st.sample_every_ps = 5;
       const auto t0 = Clock::now();
       const AlignmentRun r = run_two_tube_alignment(s, st, is);

@@ -612,5 +612,19 @@ TEST(TwoTubeAlignment, PristineTubesAlignWithinTheThesisBound) {
   EXPECT_EQ(r.thesis.front(), 0);
 }
 
+// The thesis's shear dashpot also damps the sliding by which the two tubes zip, so they align
+// later than with the normal-only dashpot (docs/tensile.md: 230 against 190 ps).
+TEST(TwoTubeAlignment, ShearDashpotSlowsTheZipping) {
+  IntegratorSettings is;
+  is.threads = 1;
+  AlignmentSettings st;
+  st.max_ps = 1500;
+  const AlignmentRun normal = run_two_tube_alignment({}, st, is);
+  st.dashpot_shear = true;
+  const AlignmentRun shear = run_two_tube_alignment({}, st, is);
+  ASSERT_TRUE(normal.t_align.has_value() && shear.t_align.has_value());
+  EXPECT_GT(*shear.t_align, *normal.t_align * 1.1);
+}
+
 }  // namespace
 }  // namespace mdem

@@ -72,7 +72,9 @@ AlignmentRun run_two_tube_alignment(const TwoTubeAlignmentSpec& spec, const Alig
 
   Elements el;
   add_two_tube_alignment(el, spec);
-  auto sys = tensile_film_system(std::move(el), integrator, st.dashpot_ratio);
+  FilmLaws laws;
+  laws.dashpot_shear = st.dashpot_shear;
+  auto sys = tensile_film_system(std::move(el), integrator, st.dashpot_ratio, nullptr, laws);
   sys->initialize();
   AlignmentRun r;
   r.dt = sys->dt();

@@ -38,6 +38,7 @@ struct AlignmentSettings {
   double max_ps = 3000;         // the run ends at this time or at alignment (> 0)
   double sample_every_ps = 10;  // aligned pairs counted this often (> 0)
   double dashpot_ratio = 0.03;  // ψ of the contact dashpots, in [0, 1]
+  bool dashpot_shear = false;   // the CNT dashpot damps shear too (ContactDampingParams::shear)
   int target = 45;              // registry-free count that counts as aligned (90 % of 50), >= 1
 };
 
