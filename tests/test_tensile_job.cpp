@@ -595,15 +595,21 @@ TEST(TwoTubeAlignment, SceneGeometryOfSection37) {
   EXPECT_THROW(run_two_tube_alignment({}, st), std::invalid_argument);
 }
 
-TEST(TwoTubeAlignment, PristineTubesAlignWithinTheThesisBound) {
-  // Thesis Fig. 5-7: aligned at about 0.75 ns; tensile.md §5 accepts 0.3–1.5 ns. The engine
-  // aligns faster than the band's lower end (190 ps; docs/tensile.md gives the 0/1/2-NP table
-  // from bench/validate_tensile and what may explain it): only the upper bound is asserted.
+// The pristine two-tube alignment on one thread, for at most 1.5 ns.
+AlignmentRun pristine_alignment(bool dashpot_shear) {
   IntegratorSettings is;
   is.threads = 1;
   AlignmentSettings st;
   st.max_ps = 1500;
-  const AlignmentRun r = run_two_tube_alignment({}, st, is);
+  st.dashpot_shear = dashpot_shear;
+  return run_two_tube_alignment({}, st, is);
+}
+
+TEST(TwoTubeAlignment, PristineTubesAlignWithinTheThesisBound) {
+  // Thesis Fig. 5-7: aligned at about 0.75 ns; tensile.md §5 accepts 0.3–1.5 ns. The engine
+  // aligns faster than the band's lower end (190 ps; docs/tensile.md gives the 0/1/2-NP table
+  // from bench/validate_tensile and what may explain it): only the upper bound is asserted.
+  const AlignmentRun r = pristine_alignment(false);
   ASSERT_TRUE(r.t_align.has_value())
       << "not aligned in 1.5 ns; registry-free count " << r.registry_free.back();
   EXPECT_LE(*r.t_align, 1500);
@@ -615,13 +621,8 @@ TEST(TwoTubeAlignment, PristineTubesAlignWithinTheThesisBound) {
 // The thesis's shear dashpot also damps the sliding by which the two tubes zip, so they align
 // later than with the normal-only dashpot (docs/tensile.md: 230 against 190 ps).
 TEST(TwoTubeAlignment, ShearDashpotSlowsTheZipping) {
-  IntegratorSettings is;
-  is.threads = 1;
-  AlignmentSettings st;
-  st.max_ps = 1500;
-  const AlignmentRun normal = run_two_tube_alignment({}, st, is);
-  st.dashpot_shear = true;
-  const AlignmentRun shear = run_two_tube_alignment({}, st, is);
+  const AlignmentRun normal = pristine_alignment(false);
+  const AlignmentRun shear = pristine_alignment(true);
   ASSERT_TRUE(normal.t_align.has_value() && shear.t_align.has_value());
   EXPECT_GT(*shear.t_align, *normal.t_align * 1.1);
 }
