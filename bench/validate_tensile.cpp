@@ -120,19 +120,19 @@ int film(const std::vector<std::string>& args, IntegratorSettings is) {
       spec.relax_report_ps = list(v);
     else if (k == "--vdw-law") {  // exact (default) or pfc: the thesis's literal Table 2-3
       if (v == "pfc") {
-        spec.vdw_torque = VdwTorque::Pfc;
-        spec.vdw_flip_blend = 0;
+        spec.laws.vdw.torque = VdwTorque::Pfc;
+        spec.laws.vdw.flip_blend = 0;
       } else if (v != "exact") {
         throw std::invalid_argument("film: --vdw-law must be exact or pfc, got " + v);
       }
     } else if (k == "--flip-blend")  // after --vdw-law, to keep one of its settings apart
-      spec.vdw_flip_blend = std::stod(v);
+      spec.laws.vdw.flip_blend = std::stod(v);
     else if (k == "--local-damping")
       spec.local_damping = std::stod(v);
     else if (k == "--psi")
       spec.dashpot_ratio = std::stod(v);
     else if (k == "--dashpot-shear")  // 1: the thesis's shear dashpot too, 0: normal-only
-      spec.dashpot_shear = v == "1";
+      spec.laws.dashpot_shear = v == "1";
     else if (k == "--guard-tolerance")  // the run guard's (a non-conservative law adds energy)
       is.guard_energy_tolerance = std::stod(v);
     else if (k == "--dt")  // fixed for every stage (default: the job picks it per stage)

@@ -419,11 +419,11 @@ TEST(SpecTensileYaml, WrongValuesAreRefusedWithTheirField) {
 // The spec's damping choices reach the engine's job spec (jobs/src/tensile_job_kind.cpp).
 TEST(SpecTensileJob, DampingChoicesReachTheEngine) {
   const mdem::TensileJobSpec plain = mdem::tensile_job_spec(finalized_json(R"({"tensile":{}})"));
-  EXPECT_FALSE(plain.dashpot_shear);
+  EXPECT_FALSE(plain.laws.dashpot_shear);
   EXPECT_DOUBLE_EQ(plain.dashpot_ratio, 0.03);
   const mdem::TensileJobSpec thesis = mdem::tensile_job_spec(finalized_json(
       R"({"tensile":{"vdw_dashpot_shear":true, "vdw_damping_ratio":0.05, "local_damping":0.2}})"));
-  EXPECT_TRUE(thesis.dashpot_shear);
+  EXPECT_TRUE(thesis.laws.dashpot_shear);
   EXPECT_DOUBLE_EQ(thesis.dashpot_ratio, 0.05);
   EXPECT_DOUBLE_EQ(thesis.local_damping, 0.2);
 }

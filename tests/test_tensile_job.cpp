@@ -486,9 +486,9 @@ TEST(TensileJob, LawsOfTheSpecAreTheSystems) {
   EXPECT_EQ(exact.vdw.torque, VdwTorque::Exact);
   EXPECT_EQ(exact.vdw.flip_blend, VdwParams{}.flip_blend);
   EXPECT_FALSE(exact.dashpot_shear);
-  s.vdw_torque = VdwTorque::Pfc;
-  s.vdw_flip_blend = 0;
-  s.dashpot_shear = true;
+  s.laws.vdw.torque = VdwTorque::Pfc;
+  s.laws.vdw.flip_blend = 0;
+  s.laws.dashpot_shear = true;
   const FilmLaws thesis = laws(TensileJob(s, one_thread()));
   EXPECT_EQ(thesis.vdw.torque, VdwTorque::Pfc);
   EXPECT_EQ(thesis.vdw.flip_blend, 0.0);
@@ -532,10 +532,10 @@ TEST(TensileJob, BadSpecsNameFieldAndRange) {
   bad([](TensileJobSpec& s) { s.relax_report_ps = {-1}; }, "relax_report_ps");
   bad([](TensileJobSpec& s) { s.relax_report_ps.assign(1001, 1.0); }, "relax_report_ps");
   bad([&](TensileJobSpec& s) { s.test_report_strains = {nan}; }, "test_report_strains");
-  bad([](TensileJobSpec& s) { s.vdw_flip_blend = -0.1; }, "vdw_flip_blend");
-  bad([](TensileJobSpec& s) { s.vdw_flip_blend = 0.6; }, "vdw_flip_blend");
-  bad([&](TensileJobSpec& s) { s.vdw_flip_blend = nan; }, "vdw_flip_blend");
-  bad([](TensileJobSpec& s) { s.vdw_torque = static_cast<VdwTorque>(7); }, "vdw_torque");
+  bad([](TensileJobSpec& s) { s.laws.vdw.flip_blend = -0.1; }, "vdw_flip_blend");
+  bad([](TensileJobSpec& s) { s.laws.vdw.flip_blend = 0.6; }, "vdw_flip_blend");
+  bad([&](TensileJobSpec& s) { s.laws.vdw.flip_blend = nan; }, "vdw_flip_blend");
+  bad([](TensileJobSpec& s) { s.laws.vdw.torque = static_cast<VdwTorque>(7); }, "vdw_torque");
   EXPECT_THROW(np_deposit_from_name("later"), std::invalid_argument);
   EXPECT_EQ(np_deposit_from_name("before_relax"), NpDeposit::BeforeRelax);
   EXPECT_EQ(np_deposit_name(NpDeposit::AfterRelax), "after_relax");

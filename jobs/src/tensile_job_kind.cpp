@@ -46,7 +46,7 @@ TensileJobSpec tensile_job_spec(const v1::JobSpec& spec) {
   job.relax_ps = t.relax_ps();
   job.dashpot_ratio = t.vdw_damping_ratio();
   job.local_damping = t.local_damping();
-  job.dashpot_shear = t.vdw_dashpot_shear();
+  job.laws.dashpot_shear = t.vdw_dashpot_shear();
   job.mode = t.mode() == v1::CYCLIC ? TensileMode::Cyclic : TensileMode::Monotonic;
   // Strains are percent in the spec, fractions in the engine; rates 1/ps in both.
   job.monotonic.strain_rate = t.strain_rate_per_ps();

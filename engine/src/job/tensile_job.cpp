@@ -192,9 +192,9 @@ void TensileJobSpec::validate() const {
   check_range("grip_width", grip_width, 0, 0.5 * film.side, true);
   check_range("sample_every_ps", sample_every_ps, 0, 1e6, true);
   check_range("relax_count_every_ps", relax_count_every_ps, 0, 1e6, true);
-  check_range("vdw_flip_blend", vdw_flip_blend, 0, 0.5);
-  if (vdw_torque != VdwTorque::Exact && vdw_torque != VdwTorque::Pfc)
-    bad("vdw_torque", "Exact or Pfc", static_cast<double>(vdw_torque));
+  check_range("vdw_flip_blend", laws.vdw.flip_blend, 0, 0.5);
+  if (laws.vdw.torque != VdwTorque::Exact && laws.vdw.torque != VdwTorque::Pfc)
+    bad("vdw_torque", "Exact or Pfc", static_cast<double>(laws.vdw.torque));
   if (temperature_k != 0) bad("temperature_k", "0 (the films start at rest)", temperature_k);
   const TensileProtocol check(loading_of(*this));  // rates, ramp, target, amplitude, period
   // Times and strains the run does not reach are simply not reported.
@@ -205,14 +205,6 @@ void TensileJobSpec::validate() const {
     bad("test_report_strains", "at most 1000 strains",
         static_cast<double>(test_report_strains.size()));
   for (double e : test_report_strains) check_range("test_report_strains", e, 0, 10);
-}
-
-FilmLaws TensileJobSpec::laws() const {
-  FilmLaws l;
-  l.vdw.torque = vdw_torque;
-  l.vdw.flip_blend = vdw_flip_blend;
-  l.dashpot_shear = dashpot_shear;
-  return l;
 }
 
 // What the job records outside its stages' observers: the pre-relaxations' outcomes. A part of
@@ -628,8 +620,7 @@ double TensileJob::pick_dt(const Elements& el, const ParallelBond* rest) const {
   if (!auto_dt_) return *settings_.dt;
   IntegratorSettings probe_settings = settings_;
   probe_settings.dt.reset();
-  const auto probe =
-      tensile_film_system(el, probe_settings, spec_.dashpot_ratio, rest, spec_.laws());
+  const auto probe = tensile_film_system(el, probe_settings, spec_.dashpot_ratio, rest, spec_.laws);
   probe->initialize();
   // With multiple time stepping the outer step respa_k·dt must also stay within safety × the
   // slow forces' own critical step (System::initialize refuses a given dt beyond it; the job
@@ -642,7 +633,7 @@ double TensileJob::pick_dt(const Elements& el, const ParallelBond* rest) const {
 
 void TensileJob::rebuild(Elements el, double dt, const ParallelBond* rest) {
   settings_.dt = dt;
-  sys_ = tensile_film_system(std::move(el), settings_, spec_.dashpot_ratio, rest, spec_.laws());
+  sys_ = tensile_film_system(std::move(el), settings_, spec_.dashpot_ratio, rest, spec_.laws);
 }
 
 void TensileJob::build(Elements el) {
@@ -655,7 +646,7 @@ void TensileJob::build(Elements el) {
     settings_.dt = pick_dt(el, nullptr);
   }
   dt_start_ = *settings_.dt;
-  sys_ = tensile_film_system(std::move(el), settings_, spec_.dashpot_ratio, nullptr, spec_.laws());
+  sys_ = tensile_film_system(std::move(el), settings_, spec_.dashpot_ratio, nullptr, spec_.laws);
 
   records_ = std::make_shared<Records>();
   protocol_ = std::make_shared<TensileProtocol>(loading_of(spec_));

@@ -42,7 +42,7 @@ namespace mdem {
 class GripStressSampler;
 class ParallelBond;
 
-// The choices of law a comparison with the thesis may change (TensileJobSpec::laws()): the
+// The choices of law a comparison with the thesis may change (TensileJobSpec::laws): the
 // CNT–CNT vdW law's parameters, and whether the CNT contact dashpot also damps shear.
 struct FilmLaws {
   VdwParams vdw;
@@ -114,16 +114,14 @@ struct TensileJobSpec {
   // at 2 % when the test reaches it; fragments at 50, 100, 150, 200 % when reached.
   std::vector<double> test_report_strains = {0, 0.02, 0.1, 0.2};
 
-  // For comparisons with the thesis: the CNT–CNT vdW law (not in the proto; validate_tensile's
-  // --vdw-law sets it), the energy-conserving default (VdwTorque::Exact, flip_blend 0.2) or the
-  // thesis's literal Table 2-3 as run in PFC (VdwTorque::Pfc and flip_blend 0; model.md §4);
-  // and the CNT contact dashpot, normal-only (default) or with the thesis's shear part
-  // (Eq. 33–34, ContactDampingParams::shear; the proto's vdw_dashpot_shear, `mdem run tensile
+  // For comparisons with the thesis: the CNT–CNT vdW law (laws.vdw: its torque and
+  // flip_blend, not in the proto; validate_tensile's --vdw-law sets them), the energy-conserving
+  // default (VdwTorque::Exact, flip_blend 0.2, in [0, 0.5]) or the thesis's literal Table 2-3 as
+  // run in PFC (VdwTorque::Pfc and flip_blend 0; model.md §4); and the CNT contact dashpot
+  // (laws.dashpot_shear), normal-only (default) or with the thesis's shear part (Eq. 33–34,
+  // ContactDampingParams::shear; the proto's vdw_dashpot_shear, `mdem run tensile
   // --dashpot-shear`).
-  VdwTorque vdw_torque = VdwTorque::Exact;
-  double vdw_flip_blend = 0.2;  // in [0, 0.5]
-  bool dashpot_shear = false;
-  FilmLaws laws() const;
+  FilmLaws laws;
 
   // Kelvin; only 0 is accepted (§6 #16: the thesis's films start at rest).
   double temperature_k = 0;
