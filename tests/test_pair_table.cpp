@@ -266,3 +266,18 @@ TEST(PairTable, ADashpotWithoutItsContactListsItsOwnPairs) {
   for (std::size_t i = 0; i < el.size(); ++i)
     if (el.kind[i] == ElementKind::Nanoparticle) EXPECT_EQ(sys.damping_forces()[i].norm(), 0.0);
 }
+
+// A dashpot added before its contact still shares the contact's list (one entry, one build per
+// update), as one added after it does.
+TEST(PairTable, ADashpotAddedBeforeItsContactSharesItsList) {
+  for (const bool dashpot_first : {true, false}) {
+    System sys(scene(), IntegratorSettings{});
+    if (dashpot_first) sys.add(std::make_unique<ViscousContactDamping>(ContactDampingParams{}));
+    const auto* vdw = sys.add(std::make_unique<AnisotropicVdw>());
+    if (!dashpot_first) sys.add(std::make_unique<ViscousContactDamping>(ContactDampingParams{}));
+    sys.initialize();
+    const auto* dashpot = sys.find<ViscousContactDamping>();
+    EXPECT_EQ(sys.pair_table().entries().size(), 1u) << "dashpot first: " << dashpot_first;
+    EXPECT_EQ(sys.neighbors(*dashpot), sys.neighbors(*vdw)) << "dashpot first: " << dashpot_first;
+  }
+}

@@ -41,16 +41,22 @@ void PairTable::setup(const std::vector<ForceModelPtr>& models, double skin, con
       if (e.owner->name() == name) return &e;
     return nullptr;
   };
+  // Whether m belongs to another pair model of the system (its owner lists the pairs).
+  auto has_owner = [&](const ForceModel* m) {
+    const std::string_view name = m->pair_owner();
+    return !name.empty() && std::any_of(models.begin(), models.end(), [&](const auto& o) {
+      return o.get() != m && o->cutoff() > 0 && o->pair_owner().empty() && o->name() == name;
+    });
+  };
   // Owners first (a model may be added before the contact it belongs to), then the members.
   for (int pass = 0; pass < 2; ++pass) {
     for (const auto& mp : models) {
       const ForceModel* m = mp.get();
       if (!(m->cutoff() > 0)) continue;
-      Entry* owner = m->pair_owner().empty() ? nullptr : find_owner(m->pair_owner());
-      if (owner && owner->owner == m) owner = nullptr;
-      const bool joins = owner != nullptr;
+      const bool joins = has_owner(m);
       if ((pass == 0) == joins) continue;
       if (joins) {
+        Entry* owner = find_owner(m->pair_owner());
         if (m->cutoff() > owner->cutoff) {
           std::ostringstream msg;
           msg << m->name() << " belongs to the pairs of " << owner->owner->name()
