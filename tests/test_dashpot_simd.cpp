@@ -2,7 +2,8 @@
 // pair over random pairs (distances from coincident to the cutoff, random relative velocities,
 // unequal masses, NaN), on every instruction set the build carries, and over a random film
 // through the pair driver (open and periodic, 1 and 2 threads), with the dashpot's own
-// conservation laws (Newton's third law, angular momentum) and determinism of the batched sum.
+// conservation laws (Newton's third law, angular momentum) and determinism of the batched sum;
+// and the dashpot evaluated in one pass with its vdW contact against the two passes apart.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,7 +15,9 @@
 #include <vector>
 
 #include "hwy/targets.h"
+#include "mdem/force/contact/anisotropic_vdw.h"
 #include "mdem/force/damping/viscous_contact_damping.h"
+#include "mdem/integrate/system.h"
 #include "mdem/neighbor/neighbor_list.h"
 #include "mdem/scene/tube_builder.h"
 
@@ -273,6 +276,104 @@ TEST(DashpotSimd, FilmForcesEqualScalarKernel) {
   compare_on_film(Domain{}, false);
   compare_on_film(Domain{}, true);
   compare_on_film(Domain(Vec3(-20, -20, -50), Vec3(20, 20, 50), {true, true, false}), false);
+}
+
+// Everything a force evaluation leaves: the reduced forces, torques, damping forces and torques,
+// and the stored energy.
+struct Evaluation {
+  std::vector<Vec3> f, t, fd, td;
+  double energy = 0;
+  bool operator==(const Evaluation&) const = default;
+};
+
+template <class Compute>
+Evaluation evaluate(const Elements& el, int threads, Compute compute) {
+  ForceSink sink;
+  sink.resize(el.size(), threads, true);
+  compute(sink);
+  Evaluation e{std::vector<Vec3>(el.size()), std::vector<Vec3>(el.size()),
+               std::vector<Vec3>(el.size()), std::vector<Vec3>(el.size())};
+  e.energy = sink.reduce(e.f, e.t, e.fd, e.td).total_stored();
+  return e;
+}
+
+// One pass over the vdW contact's list for the contact and its dashpot gives, bit for bit, what
+// the two passes give one after the other: the same lanes in the same order, each kernel into
+// its own buffers (a fused pass that dropped a batch, mixed the buffers or scattered the dashpot
+// onto the contact's lanes would differ by whole pair forces).
+void fused_equals_apart(const Domain& domain, bool shear) {
+  Elements el = random_film(11, 40.0, 60, 30);
+  // Rotate the segments a little off their tube axes, so the vdW torques are not trivial.
+  std::mt19937_64 rng(3);
+  for (std::size_t i = 0; i < el.size(); ++i)
+    el.q[i] = (Quat(Eigen::AngleAxisd(0.2, random_unit(rng))) * el.q[i]).normalized();
+  const AnisotropicVdw vdw;
+  ContactDampingParams p;
+  p.shear = shear;
+  const ViscousContactDamping dashpot(p);
+  ASSERT_EQ(vdw.cutoff(), dashpot.cutoff());
+  NeighborList nl(vdw.cutoff(), 0.5, domain);
+  nl.set_exclusion(
+      [&vdw](const Elements& e, std::size_t i, std::size_t j) { return vdw.excludes(e, i, j); });
+  nl.set_owner(&vdw);
+  nl.build(el);
+  ASSERT_GT(nl.pair_count(), 4096u);
+  for (int threads : {1, 2}) {
+    const Evaluation apart = evaluate(el, threads, [&](ForceSink& s) {
+      vdw.compute(el, &nl, s);
+      dashpot.compute(el, &nl, s);
+    });
+    bool fused = false;
+    const Evaluation one =
+        evaluate(el, threads, [&](ForceSink& s) { fused = dashpot.compute_with(vdw, el, &nl, s); });
+    ASSERT_TRUE(fused) << threads << " threads";
+    EXPECT_NE(apart.energy, 0.0);
+    EXPECT_GT(apart.fd[0].norm() + apart.fd[100].norm(), 0.0);
+    EXPECT_TRUE(one == apart) << threads << " threads, shear " << shear;
+  }
+  // Not fused (the caller then computes each): a scalar dashpot, another owner, no list.
+  const ViscousContactDamping scalar(p, DashpotEvaluation::Scalar);
+  ForceSink sink;
+  sink.resize(el.size(), 1, true);
+  EXPECT_FALSE(scalar.compute_with(vdw, el, &nl, sink));
+  EXPECT_FALSE(dashpot.compute_with(dashpot, el, &nl, sink));
+  EXPECT_FALSE(dashpot.compute_with(vdw, el, nullptr, sink));
+}
+
+TEST(DashpotFused, OnePassWithTheVdwContactEqualsTwoPasses) {
+  fused_equals_apart(Domain{}, false);
+  fused_equals_apart(Domain{}, true);
+  fused_equals_apart(Domain(Vec3(-20, -20, -50), Vec3(20, 20, 50), {true, true, false}), false);
+}
+
+// The system fuses the two whichever order they were added in, and its forces are those of the
+// two passes apart.
+TEST(DashpotFused, SystemForcesEqualTwoPassesInEitherOrder) {
+  const Elements el = random_film(5, 40.0, 60, 30);
+  Evaluation got[2];
+  for (int order : {0, 1}) {
+    IntegratorSettings s;
+    s.threads = 2;
+    System sys(el, s);
+    if (order == 0) sys.add(std::make_unique<AnisotropicVdw>());
+    sys.add(std::make_unique<ViscousContactDamping>(ContactDampingParams{}));
+    if (order == 1) sys.add(std::make_unique<AnisotropicVdw>());
+    sys.initialize();
+    const auto& E = sys.elements();
+    // The dashpot is a central force: no damping torques (the system keeps no public copy).
+    got[order] = {E.f, E.t, sys.damping_forces(), std::vector<Vec3>(E.size(), Vec3::Zero()),
+                  sys.energy().potential.total_stored()};
+    const auto* vdw = sys.find<AnisotropicVdw>();
+    const auto* dashpot = sys.find<ViscousContactDamping>();
+    const NeighborList* nl = sys.neighbors(*vdw);
+    ASSERT_EQ(nl, sys.neighbors(*dashpot));
+    const Evaluation apart = evaluate(E, 2, [&](ForceSink& k) {
+      vdw->compute(E, nl, k);
+      dashpot->compute(E, nl, k);
+    });
+    EXPECT_TRUE(got[order] == apart) << "order " << order;
+  }
+  EXPECT_TRUE(got[0] == got[1]);
 }
 
 }  // namespace

@@ -166,6 +166,19 @@ void System::initialize() {
     bad(e.what());
   }
   check_memory_order();
+  pair_partner_.assign(models_.size(), -1);
+  computed_.assign(models_.size(), 0);
+  for (std::size_t a = 0; a < models_.size(); ++a) {
+    const std::string_view owner = models_[a]->pair_owner();
+    if (owner.empty() || pair_partner_[a] >= 0) continue;
+    for (std::size_t b = 0; b < models_.size(); ++b)
+      if (b != a && pair_partner_[b] < 0 && models_[b]->name() == owner &&
+          pairs_.list_of(models_[a].get()) == pairs_.list_of(models_[b].get())) {
+        pair_partner_[a] = static_cast<int>(b);
+        pair_partner_[b] = static_cast<int>(a);
+        break;
+      }
+  }
 
   const std::size_t n = el_.size();
   sink_.resize(n, threads_, model_damping);
@@ -249,9 +262,7 @@ void System::compute_forces(bool with_local_damping, StepTimers* timers, bool in
   update_pairs();
   if (timers) lap(mark, timers->neighbor_s);
   sink_.clear();
-  for (const auto& m : models_)
-    if (respa_.inner(*m) && (inactive_.empty() || model_active(m.get())))
-      m->compute(el_, pairs_.list_of(m.get()), sink_);
+  compute_models(false);
   // Deferred: the caller's pass takes each element's sums (ForceSink::take), the energies now.
   sums_deferred_ = defer_sums && !respa_.on();
   ledger_.potential = sums_deferred_ ? sink_.energy_total() : sink_.reduce(el_.f, el_.t, fd_, td_);
@@ -286,13 +297,35 @@ void System::compute_forces(bool with_local_damping, StepTimers* timers, bool in
   }
 }
 
+void System::compute_models(bool slow) {
+  const auto wanted = [&](std::size_t a) {
+    const ForceModel& m = *models_[a];
+    return (slow ? respa_.slow(m) : respa_.inner(m)) && (inactive_.empty() || model_active(&m));
+  };
+  std::fill(computed_.begin(), computed_.end(), char{0});
+  for (std::size_t a = 0; a < models_.size(); ++a) {
+    if (computed_[a] || !wanted(a)) continue;
+    const ForceModel& m = *models_[a];
+    const NeighborList* list = pairs_.list_of(&m);
+    computed_[a] = 1;
+    if (const int b = pair_partner_[a]; b >= 0 && !computed_[b] && wanted(b)) {
+      const ForceModel& o = *models_[b];
+      const bool both = m.pair_owner().empty() ? o.compute_with(m, el_, list, sink_)
+                                               : m.compute_with(o, el_, list, sink_);
+      if (both) {
+        computed_[b] = 1;
+        continue;
+      }
+    }
+    m.compute(el_, list, sink_);
+  }
+}
+
 void System::add_slow_forces(bool in_step) {
   const bool closes = respa_.closes_outer_step(steps_);
   if (closes || !in_step) {
     sink_.clear();
-    for (const auto& m : models_)
-      if (respa_.slow(*m) && (inactive_.empty() || model_active(m.get())))
-        m->compute(el_, pairs_.list_of(m.get()), sink_);
+    compute_models(true);
     respa_.tally = sink_.reduce(respa_.f, respa_.t, respa_.fd, respa_.td);
     respa_.tags = el_.tag;
   } else {

@@ -144,6 +144,14 @@ class ForceModel : public ElementIndexHolder {
   // slot of omp_get_thread_num() inside its own `#pragma omp parallel for schedule(static)`.
   // `pairs` is null for models with cutoff() == 0.
   virtual void compute(const Elements& el, const NeighborList* pairs, ForceSink& sink) const = 0;
+  // For a model whose pairs are `owner`'s (pair_owner() == owner.name(), both handed `pairs`):
+  // evaluates owner and this model together in one pass over the list, as owner.compute and
+  // compute would one after the other (a dashpot with its contact: one walk, one gather of the
+  // far elements for both), and returns true; false when it cannot (the caller then computes each).
+  virtual bool compute_with(const ForceModel& /*owner*/, const Elements&, const NeighborList*,
+                            ForceSink&) const {
+    return false;
+  }
 
   // Adds this model's stiffness bounds at the current state.
   virtual void add_stiffness(const Elements& el, const NeighborList* pairs,

@@ -30,7 +30,8 @@
 //       // closer than cutoff(), in list order, and adds the results in the same order, so a
 //       // kernel with a batch path must not act beyond its cutoff, and f2 = −f1 (no external
 //       // force on the pair)
-//   void touch(std::uint32_t j) const;  // with batch(): prefetch what batch() reads of element j
+//   void touch(const Elements&, std::uint32_t j) const;
+//       // with batch(): prefetch what batch() reads of element j beyond x_j (the driver's own)
 // PairModel<K> makes a ForceModel of it.
 #include <omp.h>
 
@@ -39,6 +40,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -195,6 +197,39 @@ inline void prefetch_vec3_end(const Vec3* p) {
 // How far ahead in the neighbour list the gather prefetches x_j.
 inline constexpr std::uint32_t kPrefetchAhead = 16;
 
+// No companion kernel (run_batched's default).
+struct NoCompanion {};
+
+// Adds the results of the batch's first `lanes` pairs, as kernel K wrote them, to the thread's
+// buffers f, t (K's own: the damping slots for a dissipative kernel) and to energy. The pairs of
+// one i are consecutive: their forces on i are summed in registers and added to f_i, t_i once
+// per run of i.
+template <class K>
+inline void scatter(const PairBatch& b, int lanes, Vec3* __restrict f, Vec3* __restrict t,
+                    double& energy) {
+  std::uint32_t ci = b.i[0];
+  Vec3 fi = Vec3::Zero(), ti = Vec3::Zero();
+  for (int p = 0; p < lanes; ++p) {
+    if (b.i[p] != ci) {
+      f[ci] += fi;
+      if constexpr (K::kTorques) t[ci] += ti;
+      ci = b.i[p];
+      fi.setZero();
+      ti.setZero();
+    }
+    const Vec3 fp(b.fx[p], b.fy[p], b.fz[p]);
+    fi += fp;
+    f[b.j[p]] -= fp;
+    if constexpr (K::kTorques) {
+      ti += Vec3(b.t1x[p], b.t1y[p], b.t1z[p]);
+      t[b.j[p]] += Vec3(b.t2x[p], b.t2y[p], b.t2z[p]);
+    }
+    if constexpr (!K::kDissipative) energy += b.energy[p];
+  }
+  f[ci] += fi;
+  if constexpr (K::kTorques) t[ci] += ti;
+}
+
 // The driver of a batched kernel: as run(), but the pairs within the cutoff are gathered into a
 // per-thread PairBatch (in list order, branch-free) and evaluated a batch at a time; the results
 // are added to the thread's buffers in the same order, so the sums are the same run to run.
@@ -205,9 +240,17 @@ inline constexpr std::uint32_t kPrefetchAhead = 16;
 // The loop works on raw pointers and a lane count held in a register: through the vectors and
 // b.n, GCC reloaded el.x's data pointer and b.n from memory at every pair (the batch escapes
 // into the kernel, so its stores may alias anything reached through a reference).
-template <bool kPeriodic, bool kFilter, class K>
+//
+// With a companion kernel C (c non-null: a dashpot over its contact's pairs, same cutoff, same
+// list), each batch is evaluated by k and then by c, each adding its results to its own buffers:
+// one walk of the list, one gather and one set of cache misses on the j for both. Each kernel's
+// sums are those of its own run_batched, bit for bit (the same lanes in the same order, into
+// buffers the other does not write: c is dissipative, k is not).
+template <bool kPeriodic, bool kFilter, class K, class C = NoCompanion>
 void run_batched(const K& k, const Elements& el, const NeighborList& list, ForceSink& sink,
-                 bool threaded) {
+                 bool threaded, const C* c = nullptr) {
+  constexpr bool kFused = !std::is_same_v<C, NoCompanion>;
+  if constexpr (kFused) static_assert(C::kDissipative && !K::kDissipative && !kFilter);
   const std::uint32_t* const off = list.offsets().data();
   const std::uint32_t* const nb = list.neighbors().data();
   const Domain& domain = list.domain();
@@ -217,38 +260,27 @@ void run_batched(const K& k, const Elements& el, const NeighborList& list, Force
 #pragma omp parallel num_threads(sink.threads()) if (threaded)
   {
     prepare_all(k, el, n);
+    if constexpr (kFused) prepare_all(*c, el, n);
     const int tid = omp_get_thread_num();
     Vec3* __restrict f = force_buffer<K>(sink, tid);
     Vec3* __restrict t = torque_buffer<K>(sink, tid);
+    Vec3* __restrict fc = nullptr;
+    Vec3* __restrict tc = nullptr;
+    if constexpr (kFused) {
+      fc = force_buffer<C>(sink, tid);
+      tc = torque_buffer<C>(sink, tid);
+    }
     const Vec3* __restrict x = el.x.data();
-    double energy = 0.0;
+    double energy = 0.0, unused = 0.0;
     PairBatch b;
     const auto flush = [&](int lanes) {
       b.n = lanes;
       k.batch(el, b);
-      // The pairs of one i are consecutive: their forces on i are summed in registers and added
-      // to f_i, t_i once per run of i.
-      std::uint32_t ci = b.i[0];
-      Vec3 fi = Vec3::Zero(), ti = Vec3::Zero();
-      for (int p = 0; p < lanes; ++p) {
-        if (b.i[p] != ci) {
-          f[ci] += fi;
-          if constexpr (K::kTorques) t[ci] += ti;
-          ci = b.i[p];
-          fi.setZero();
-          ti.setZero();
-        }
-        const Vec3 fp(b.fx[p], b.fy[p], b.fz[p]);
-        fi += fp;
-        f[b.j[p]] -= fp;
-        if constexpr (K::kTorques) {
-          ti += Vec3(b.t1x[p], b.t1y[p], b.t1z[p]);
-          t[b.j[p]] += Vec3(b.t2x[p], b.t2y[p], b.t2z[p]);
-        }
-        if constexpr (!K::kDissipative) energy += b.energy[p];
+      scatter<K>(b, lanes, f, t, energy);
+      if constexpr (kFused) {
+        c->batch(el, b);  // reads the gathered i, j, d, which k.batch leaves as they were
+        scatter<C>(b, lanes, fc, tc, unused);
       }
-      f[ci] += fi;
-      if constexpr (K::kTorques) t[ci] += ti;
     };
     std::uint32_t* const bi = b.i;
     std::uint32_t* const bj = b.j;
@@ -268,7 +300,12 @@ void run_batched(const K& k, const Elements& el, const NeighborList& list, Force
         }
         prefetch_vec3_end<1>(f + j);
         if constexpr (K::kTorques) prefetch_vec3_end<1>(t + j);
-        if constexpr (requires { k.touch(j); }) k.touch(j);
+        if constexpr (requires { k.touch(el, j); }) k.touch(el, j);
+        if constexpr (kFused) {
+          prefetch_vec3_end<1>(fc + j);
+          if constexpr (C::kTorques) prefetch_vec3_end<1>(tc + j);
+          if constexpr (requires { c->touch(el, j); }) c->touch(el, j);
+        }
         const Vec3 d = displacement<kPeriodic>(domain, xi, x[j]);
         // Written to the next free lane, kept when within the cutoff (a NaN is kept too).
         bi[lanes] = static_cast<std::uint32_t>(i);
@@ -326,6 +363,31 @@ void drive_pairs(const K& k, const Elements& el, const NeighborList& list, Force
     else
       run_any<false, false>(k, el, list, sink, threaded);
   }
+}
+
+// Adds kernel k's and its companion c's forces over the pairs of `list`, which was built for
+// both (no exclusion filter), in one pass (run_batched with a companion): as drive_pairs(k) and
+// then drive_pairs(c), bit for bit. Both must be batched with one cutoff and c dissipative.
+template <class K, class C>
+void drive_pairs_fused(const K& k, const C& c, const Elements& el, const NeighborList& list,
+                       ForceSink& sink) {
+  if (el.size() == 0) return;
+  if (list.offsets().size() != el.size() + 1)
+    throw std::logic_error(std::string(k.name()) +
+                           ": neighbour list was not built for these elements");
+  if (!sink.has_damping())
+    throw std::logic_error(std::string(c.name()) + ": force sink has no damping buffers");
+  if (!k.batched() || !c.batched() || k.cutoff() != c.cutoff())
+    throw std::logic_error(std::string(k.name()) + " and " + std::string(c.name()) +
+                           ": a fused pass needs two batched kernels with one cutoff");
+  if constexpr (requires { k.begin(el); }) k.begin(el);
+  if constexpr (requires { c.begin(el); }) c.begin(el);
+  const bool threaded = static_cast<long>(list.pair_count()) >= 2 * kParallelMinItems;
+  using namespace pair_driver_detail;
+  if (list.domain().any_periodic())
+    run_batched<true, false>(k, el, list, sink, threaded, &c);
+  else
+    run_batched<false, false>(k, el, list, sink, threaded, &c);
 }
 
 // Adds kernel k's stiffness bounds over the pairs of `list` (serial, in list order).
@@ -390,6 +452,22 @@ class PairModel : public ForceModel {
     if (!pairs) throw std::logic_error(std::string(name()) + ": compute() needs a neighbour list");
     drive_pairs(k_, el, *pairs, sink, !list_is_for(*pairs, *this));
   }
+  // A kernel whose pairs are another kernel's names it as `using Owner = ...;` (the dashpot its
+  // contact's): with both batched on one cutoff and the list theirs, one pass does both.
+  bool compute_with(const ForceModel& owner, const Elements& el, const NeighborList* pairs,
+                    ForceSink& sink) const override {
+    if constexpr (requires { typename K::Owner; }) {
+      const auto* o = dynamic_cast<const PairModel<typename K::Owner>*>(&owner);
+      if (!o || !pairs || !active() || !o->active()) return false;
+      const auto& ok = o->kernel();
+      if (!k_.batched() || !ok.batched() || k_.cutoff() != ok.cutoff()) return false;
+      if (!list_is_for(*pairs, *this) || !list_is_for(*pairs, *o)) return false;
+      drive_pairs_fused(ok, k_, el, *pairs, sink);
+      return true;
+    } else {
+      return ForceModel::compute_with(owner, el, pairs, sink);
+    }
+  }
   void add_stiffness(const Elements& el, const NeighborList* pairs,
                      StiffnessSums& s) const override {
     if (!active() || !pairs) return;
@@ -397,17 +475,16 @@ class PairModel : public ForceModel {
   }
 
   const K& kernel() const { return k_; }
-
- protected:
-  K k_;
-
- private:
+  // False: the model does nothing (e.g. a dashpot with a zero damping ratio).
   bool active() const {
     if constexpr (requires { k_.active(); })
       return k_.active();
     else
       return true;
   }
+
+ protected:
+  K k_;
 };
 
 }  // namespace mdem

@@ -243,6 +243,10 @@ class System {
   void compute_forces(bool with_local_damping = true, StepTimers* timers = nullptr,
                       bool in_step = false, bool defer_sums = false);
   void add_slow_forces(bool in_step);
+  // Adds the forces of the models of one timescale (slow: r-RESPA's outer step; else the inner
+  // step's) that the stage has not switched off, each once; a model and the one whose pairs are
+  // its (a dashpot and its contact) in one pass where they can (ForceModel::compute_with).
+  void compute_models(bool slow);
   // Memory order (system_order.cpp). update_pairs: the pair table's update, reordering the
   // elements along the curve of settings_.memory_order first when a sub-list is stale.
   void update_pairs();
@@ -265,6 +269,10 @@ class System {
   std::vector<ForceModelPtr> models_;
   std::vector<std::shared_ptr<Updater>> updaters_;
   std::vector<const ForceModel*> inactive_;  // models switched off by the current stage
+  // Per model: the index of the model that shares its pairs (its pair owner, or the model whose
+  // owner it is) or −1, and whether compute_models has computed it yet in this evaluation.
+  std::vector<int> pair_partner_;
+  std::vector<char> computed_;
   std::unique_ptr<Domain> domain_ = std::make_unique<Domain>();  // models point to it
   PairTable pairs_;   // per-kind-pair table: the pair models' neighbour sub-lists
   RespaSplit respa_;  // multiple time stepping's slow forces (respa_k > 1)

@@ -141,7 +141,9 @@ class VdwKernel {
   bool pair(const Elements& el, std::size_t i, std::size_t j, const Vec3& d, PairForces& out) const;
   bool batched() const { return eval_ == VdwEvaluation::Batched; }
   void batch(const Elements& el, PairBatch& b) const;
-  void touch(std::uint32_t j) const { pair_driver_detail::prefetch_vec3_end<0>(axes_.data() + j); }
+  void touch(const Elements&, std::uint32_t j) const {
+    pair_driver_detail::prefetch_vec3_end<0>(axes_.data() + j);
+  }
   void stiffness(const Elements& el, std::size_t i, std::size_t j, const Vec3& d,
                  StiffnessSums& s) const;
   const VdwParams& params() const { return p_; }

@@ -17,6 +17,7 @@
 // is still damped through the many pairs at oblique angles. The shear option is for comparisons
 // with the thesis on gripped films (the tensile job), where no body turns as a whole: it damps
 // sliding at a crossing directly, and conserves linear momentum but not angular momentum.
+#include "mdem/force/contact/anisotropic_vdw.h"
 #include "mdem/force/pair_driver.h"
 
 namespace mdem {
@@ -51,6 +52,8 @@ class ContactDampingKernel {
                                 DashpotEvaluation e = DashpotEvaluation::Batched);
   std::string_view name() const { return "viscous_contact_damping"; }
   std::string_view owner() const { return "anisotropic_vdw"; }
+  // Its pairs are the vdW contact's: the system evaluates both in one pass (compute_with).
+  using Owner = VdwKernel;
   bool active() const { return p_.ratio != 0; }
   double cutoff() const { return p_.cutoff; }
   KindPairs kinds() const {
@@ -62,6 +65,12 @@ class ContactDampingKernel {
   bool pair(const Elements& el, std::size_t i, std::size_t j, const Vec3& d, PairForces& out) const;
   bool batched() const { return eval_ == DashpotEvaluation::Batched; }
   void batch(const Elements& el, PairBatch& b) const;
+  // batch() reads v_j and m_j of an element of another tube, a cache miss each: fetched while
+  // the driver gathers the rest of the batch.
+  void touch(const Elements& el, std::uint32_t j) const {
+    pair_driver_detail::prefetch_vec3_end<0>(el.v.data() + j);
+    __builtin_prefetch(el.mass.data() + j, 0, 3);
+  }
   void stiffness(const Elements& el, std::size_t i, std::size_t j, const Vec3& d,
                  StiffnessSums& s) const;
   const ContactDampingParams& params() const { return p_; }
