@@ -26,6 +26,7 @@
 #include "mdem/force/damping/np_contact_damping.h"
 #include "mdem/force/damping/viscous_contact_damping.h"
 #include "mdem/integrate/system.h"
+#include "mdem/job/tensile_job.h"
 #include "mdem/scene/nanoparticle.h"
 #include "mdem/scene/tube_builder.h"
 #include "support.h"
@@ -179,6 +180,58 @@ TEST(NpContactDamping, DefaultCoefficientsAreTensileMdSection34s) {
   EXPECT_NEAR(dashpot_coefficient(0.03, m_seg, m_seg, 100.0), 2.22, 0.005);
   EXPECT_NEAR(dashpot_coefficient(cnt.ratio, np::kMass, m_seg, cnt.stiffness), 3.11, 0.005);
   EXPECT_NEAR(dashpot_coefficient(npnp.ratio, np::kMass, np::kMass, npnp.stiffness), 14.2, 0.05);
+}
+
+// The NP dashpots' shear option against Eq. 33-34 by hand (as DashpotShear's CNT-CNT test): an NP
+// and a segment 4 nm apart along x, and two NPs 5 nm apart, moving apart along the centre line at
+// 0.3 nm/ps and sliding across it at (0.4, -0.1) nm/ps. c = 2ψ√(m_eff k), m_eff the reduced
+// mass; normal-only: F_2 = −c·0.3 x̂; with shear F_2 = −c·(0.3, 0.4, −0.1); F_1 = −F_2.
+TEST(NpContactDamping, ShearOptionDampsSlidingByHand) {
+  const Vec3 u(0.3, 0.4, -0.1);
+  for (const bool np_np : {false, true}) {
+    Elements el;
+    el.add(nanoparticle(Vec3::Zero()));
+    if (np_np)
+      el.add(nanoparticle(Vec3(5, 0, 0)));
+    else
+      el.add(cnt_segment(Vec3(4, 0, 0), Quat::Identity(), 0, 0));
+    el.v[0] = Vec3(0.1, -0.2, 0.05);
+    el.v[1] = el.v[0] + u;
+    const double m_eff = el.mass[0] * el.mass[1] / (el.mass[0] + el.mass[1]);
+    const double c = 2 * 0.03 * std::sqrt(m_eff * 100.0);
+    for (const bool shear : {false, true}) {
+      const NpDashpotKernel k =
+          np_np ? np_np_dashpot(0.03, {}, 100.0, shear) : np_cnt_dashpot(0.03, {}, 100.0, shear);
+      EXPECT_EQ(k.params().shear, shear);
+      PairForces out;
+      ASSERT_TRUE(k.pair(el, 0, 1, el.x[1] - el.x[0], out));
+      const Vec3 expected = shear ? Vec3(-c * u) : Vec3(-c * 0.3, 0, 0);
+      EXPECT_LT((out.f2 - expected).norm(), 1e-14 * c) << "np-np " << np_np << " shear " << shear;
+      EXPECT_EQ(out.f1, -out.f2);
+      EXPECT_LT(out.f2.dot(u), 0.0);
+    }
+  }
+}
+
+// The tensile job's laws.dashpot_shear reaches every contact dashpot of its system.
+TEST(NpContactDamping, TheFilmsShearLawReachesTheNpDashpots) {
+  for (const bool shear : {false, true}) {
+    Elements el;
+    el.add(nanoparticle(Vec3::Zero()));
+    el.add(cnt_segment(Vec3(4, 0, 0), Quat::Identity(), 0, 0));
+    FilmLaws laws;
+    laws.dashpot_shear = shear;
+    const auto sys = tensile_film_system(std::move(el), IntegratorSettings{}, 0.03, nullptr, laws);
+    int np_dashpots = 0;
+    for (const auto& m : sys->models())
+      if (const auto* d = dynamic_cast<const NpContactDamping*>(m.get())) {
+        EXPECT_EQ(d->params().shear, shear) << d->name();
+        ++np_dashpots;
+      }
+    EXPECT_EQ(np_dashpots, 2);
+    ASSERT_NE(sys->find<ViscousContactDamping>(), nullptr);
+    EXPECT_EQ(sys->find<ViscousContactDamping>()->kernel().params().shear, shear);
+  }
 }
 
 TEST(NpNpContact, CheckValuesOfModelMd) {

@@ -149,8 +149,9 @@ std::string tensile_flags_help() {
                    default_of(d::kVdwDampingRatio)) +
          flag_help("--local-damping X", "PFC local damping", r::kLocalDamping,
                    default_of(d::kTensileLocalDamping)) +
-         "  --dashpot-shear      the CNT contact dashpot damps shear too, as the thesis's\n"
-         "                       (default: along the centre line only; docs/tensile.md)\n"
+         "  --dashpot-shear      the contact dashpots (CNT-CNT, NP-CNT, NP-NP) damp shear too,\n"
+         "                       as the thesis's (default: along the centre line only;\n"
+         "                       docs/tensile.md)\n"
          "Loading:\n"
          "  --mode M             monotonic (default: ramp to a constant rate up to --strain) or\n"
          "                       cyclic (down to -amplitude and back, --cycles times)\n" +

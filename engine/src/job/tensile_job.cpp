@@ -52,8 +52,11 @@ std::unique_ptr<System> tensile_film_system(Elements el, const IntegratorSetting
     d.ratio = dashpot_ratio;
     d.shear = laws.dashpot_shear;
     sys->add(std::make_unique<ViscousContactDamping>(d));
-    sys->add(std::make_unique<NpContactDamping>(np_cnt_dashpot(dashpot_ratio)));
-    sys->add(std::make_unique<NpContactDamping>(np_np_dashpot(dashpot_ratio)));
+    const double k = NpDampingParams{}.stiffness;
+    sys->add(std::make_unique<NpContactDamping>(
+        np_cnt_dashpot(dashpot_ratio, {}, k, laws.dashpot_shear)));
+    sys->add(std::make_unique<NpContactDamping>(
+        np_np_dashpot(dashpot_ratio, {}, k, laws.dashpot_shear)));
   }
   return sys;
 }

@@ -43,7 +43,8 @@ class GripStressSampler;
 class ParallelBond;
 
 // The choices of law a comparison with the thesis may change (TensileJobSpec::laws): the
-// CNT–CNT vdW law's parameters, and whether the CNT contact dashpot also damps shear.
+// CNT–CNT vdW law's parameters, and whether the contact dashpots (CNT–CNT, NP–CNT, NP–NP) also
+// damp shear.
 struct FilmLaws {
   VdwParams vdw;
   bool dashpot_shear = false;
@@ -118,9 +119,10 @@ struct TensileJobSpec {
   // flip_blend, not in the proto; validate_tensile's --vdw-law sets them), the energy-conserving
   // default (VdwTorque::Exact, flip_blend 0.2, in [0, 0.5]) or the thesis's literal Table 2-3 as
   // run in PFC (VdwTorque::Pfc and flip_blend 0; model.md §4); and the CNT contact dashpot
-  // (laws.dashpot_shear), normal-only (default) or with the thesis's shear part (Eq. 33–34,
-  // ContactDampingParams::shear; the proto's vdw_dashpot_shear, `mdem run tensile
-  // --dashpot-shear`).
+  // and the contact dashpots (laws.dashpot_shear), normal-only (default) or with the thesis's
+  // shear part (Eq. 33–34, ContactDampingParams::shear, NpDampingParams::shear; the proto's
+  // vdw_dashpot_shear, `mdem run tensile --dashpot-shear`) on the CNT–CNT, NP–CNT and NP–NP
+  // pairs alike.
   FilmLaws laws;
 
   // Kelvin; only 0 is accepted (§6 #16: the thesis's films start at rest).

@@ -28,9 +28,14 @@ bool NpDashpotKernel::pair(const Elements& el, std::size_t i, std::size_t j, con
                            PairForces& out) const {
   const double r2 = d.squaredNorm();
   if (r2 >= p_.cutoff * p_.cutoff || r2 == 0) return false;
-  const Vec3 n = d / std::sqrt(r2);
   const double c = dashpot_coefficient(p_.ratio, el.mass[i], el.mass[j], p_.stiffness);
-  out.f2 = -c * n.dot(el.v[j] - el.v[i]) * n;
+  const Vec3 u = el.v[j] - el.v[i];
+  if (p_.shear) {
+    out.f2 = -c * u;
+  } else {
+    const Vec3 n = d / std::sqrt(r2);
+    out.f2 = -c * n.dot(u) * n;
+  }
   out.f1 = -out.f2;
   return true;
 }
@@ -43,18 +48,20 @@ void NpDashpotKernel::stiffness(const Elements& el, std::size_t i, std::size_t j
   s.c[j] += c;
 }
 
-NpDashpotKernel np_cnt_dashpot(double ratio, const NpCntParams& contact, double stiffness) {
+NpDashpotKernel np_cnt_dashpot(double ratio, const NpCntParams& contact, double stiffness,
+                               bool shear) {
   const NpCntKernel k(contact);
   return NpDashpotKernel("np_cnt_damping", k.name(),
                          KindPairs::of(ElementKind::Nanoparticle, ElementKind::CntSegment),
-                         {ratio, stiffness, contact.cutoff()});
+                         {ratio, stiffness, contact.cutoff(), shear});
 }
 
-NpDashpotKernel np_np_dashpot(double ratio, const NpNpParams& contact, double stiffness) {
+NpDashpotKernel np_np_dashpot(double ratio, const NpNpParams& contact, double stiffness,
+                              bool shear) {
   const NpNpKernel k(contact);
   return NpDashpotKernel("np_np_damping", k.name(),
                          KindPairs::of(ElementKind::Nanoparticle, ElementKind::Nanoparticle),
-                         {ratio, stiffness, contact.cutoff()});
+                         {ratio, stiffness, contact.cutoff(), shear});
 }
 
 template class PairModel<NpDashpotKernel>;

@@ -5,9 +5,11 @@
 // so m_eff is close to the segment's on NP–CNT pairs and half an NP's on NP–NP pairs).
 //
 // Each dashpot belongs to its contact (owner() = the contact's name): it acts on exactly that
-// contact's pairs and no others. Normal-only, like the CNT–CNT dashpot
+// contact's pairs and no others. Normal-only by default, like the CNT–CNT dashpot
 // (viscous_contact_damping.h): rigid motions are not damped, linear and angular momentum are
-// conserved, and the NP gets no torque.
+// conserved, and the NP gets no torque. With `shear`, as the CNT–CNT dashpot's shear option (the
+// thesis's Eq. 33–34 shear dashpot with c_s = c_n), the force is −c·v_rel on the whole relative
+// centre velocity: sliding of an NP along a tube or past another NP is damped too.
 //
 // The stiffness k of c = 2ψ√(m_eff k) is, by default, the CNT–CNT dashpot's k = 100 eV/nm², as
 // tensile.md §3.4 and its defaults table settle (c = 3.11 eV·ps/nm² NP–CNT, 14.2 NP–NP, with the
@@ -26,6 +28,7 @@ struct NpDampingParams {
   double ratio = 0.03;       // ψ (the CNT–CNT dashpot's, thesis)
   double stiffness = 100.0;  // k (eV/nm²), > 0: tensile.md §3.4, as the CNT–CNT dashpot
   double cutoff = 0.0;       // acts on pairs closer than this (nm): the contact's cutoff
+  bool shear = false;        // damp the whole relative velocity, not only its normal part
 };
 
 // The dashpot pair kernel of one NP contact (pair_driver.h).
@@ -60,11 +63,11 @@ class NpDashpotKernel {
 };
 
 // The dashpots of the NP–CNT and NP–NP contacts with parameters `contact`: cutoff the contact's,
-// stiffness k (eV/nm²).
+// stiffness k (eV/nm²), with or without the shear part.
 NpDashpotKernel np_cnt_dashpot(double ratio = 0.03, const NpCntParams& contact = {},
-                               double stiffness = NpDampingParams{}.stiffness);
+                               double stiffness = NpDampingParams{}.stiffness, bool shear = false);
 NpDashpotKernel np_np_dashpot(double ratio = 0.03, const NpNpParams& contact = {},
-                              double stiffness = NpDampingParams{}.stiffness);
+                              double stiffness = NpDampingParams{}.stiffness, bool shear = false);
 
 extern template class PairModel<NpDashpotKernel>;
 
