@@ -166,19 +166,20 @@ void System::initialize() {
     bad(e.what());
   }
   check_memory_order();
+  // A pair-table entry's owner and its first other member share a list: they may run as one.
   pair_partner_.assign(models_.size(), -1);
   computed_.assign(models_.size(), 0);
-  for (std::size_t a = 0; a < models_.size(); ++a) {
-    const std::string_view owner = models_[a]->pair_owner();
-    if (owner.empty() || pair_partner_[a] >= 0) continue;
-    for (std::size_t b = 0; b < models_.size(); ++b)
-      if (b != a && pair_partner_[b] < 0 && models_[b]->name() == owner &&
-          pairs_.list_of(models_[a].get()) == pairs_.list_of(models_[b].get())) {
-        pair_partner_[a] = static_cast<int>(b);
-        pair_partner_[b] = static_cast<int>(a);
-        break;
-      }
-  }
+  const auto index_of = [&](const ForceModel* m) {
+    return static_cast<int>(
+        std::find_if(models_.begin(), models_.end(), [m](const auto& p) { return p.get() == m; }) -
+        models_.begin());
+  };
+  for (const auto& e : pairs_.entries())
+    if (e.members.size() > 1) {
+      const int a = index_of(e.owner), b = index_of(e.members[1]);
+      pair_partner_[a] = b;
+      pair_partner_[b] = a;
+    }
 
   const std::size_t n = el_.size();
   sink_.resize(n, threads_, model_damping);

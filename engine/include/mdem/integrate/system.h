@@ -269,8 +269,8 @@ class System {
   std::vector<ForceModelPtr> models_;
   std::vector<std::shared_ptr<Updater>> updaters_;
   std::vector<const ForceModel*> inactive_;  // models switched off by the current stage
-  // Per model: the index of the model that shares its pairs (its pair owner, or the model whose
-  // owner it is) or −1, and whether compute_models has computed it yet in this evaluation.
+  // Per model: the index of the model it may run with in one pass (a pair-table entry's owner
+  // and its first other member) or −1, and whether compute_models has computed it yet.
   std::vector<int> pair_partner_;
   std::vector<char> computed_;
   std::unique_ptr<Domain> domain_ = std::make_unique<Domain>();  // models point to it
