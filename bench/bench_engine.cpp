@@ -129,14 +129,6 @@ void BM_FilmSteps(benchmark::State& state) { run_steps(state, relaxed_film(), fi
 // 40 steps: several neighbour-list rebuilds per measurement.
 BENCHMARK(BM_FilmSteps)->Apply(one_and_two_threads)->Iterations(4);
 
-// The step's time split by phase (System::timers()), in ms per step, over the timed steps.
-void add_phase_counters(benchmark::State& state, const StepTimers& before, const StepTimers& after,
-                        double steps) {
-  state.counters["pair_ms"] = (after.pair_s - before.pair_s) / steps * 1e3;
-  state.counters["neighbor_ms"] = (after.neighbor_s - before.neighbor_s) / steps * 1e3;
-  state.counters["integrate_ms"] = (after.integrate_s - before.integrate_s) / steps * 1e3;
-}
-
 // A neighbour list built on el for pair model m alone (its cutoff, kinds' exclusion, owner).
 NeighborList list_for(const ForceModel& m, const Elements& el) {
   NeighborList nl(m.cutoff(), IntegratorSettings{}.skin);
@@ -236,7 +228,7 @@ void issue13_steps(benchmark::State& state, bool dense) {
   const StepTimers t0 = sys.timers();
   const double steps = bench::timed_steps(state, sys, 10);
   const double n = static_cast<double>(el.size());
-  add_phase_counters(state, t0, sys.timers(), steps);
+  bench::add_phase_counters(state, t0, sys.timers(), steps);
   state.counters["dt_fs"] = sys.dt() * 1e3;
   state.counters["pairs_per_element"] = static_cast<double>(sys.neighbors()->pair_count()) / n;
 }
@@ -265,7 +257,7 @@ void BM_SparseFilmIntegrator(benchmark::State& state) {
   const StepTimers t0 = sys.timers();
   const double steps = bench::timed_steps(state, sys, 10);
   const double n = static_cast<double>(el.size());
-  add_phase_counters(state, t0, sys.timers(), steps);
+  bench::add_phase_counters(state, t0, sys.timers(), steps);
   state.counters["ns_per_element"] =
       (sys.timers().integrate_s - t0.integrate_s) / (steps * n) * 1e9;
 }
@@ -339,7 +331,7 @@ void BM_DenseFilmSkin(benchmark::State& state) {
     pairs = static_cast<double>(nl.pair_count());
     state.ResumeTiming();
   }
-  add_phase_counters(state, t0, t1, steps);
+  bench::add_phase_counters(state, t0, t1, steps);
   state.counters["rebuilds_per_step"] = builds / steps;
   state.counters["build_cpu_ms"] = build_cpu * 1e3;
   state.counters["check_cpu_ms"] = check_cpu * 1e3;
@@ -503,7 +495,7 @@ void tensile_film_steps(benchmark::State& state, FilmSize size, bool nps, bool p
   const double n = static_cast<double>(sys->elements().size());
   state.counters["element_steps_per_s"] =
       benchmark::Counter(n * steps, benchmark::Counter::kIsRate);
-  add_phase_counters(state, t0, sys->timers(), steps);
+  bench::add_phase_counters(state, t0, sys->timers(), steps);
   state.counters["elements"] = n;
   state.counters["dt_fs"] = sys->dt() * 1e3;
   state.counters["pairs_per_element"] = static_cast<double>(sys->neighbors()->pair_count()) / n;
@@ -562,7 +554,7 @@ void BM_MemoryOrderFilmSteps(benchmark::State& state) {
   const StepTimers t0 = sys.timers();
   const double steps = bench::timed_steps(state, sys, 10);
   const double n = static_cast<double>(sys.elements().size());
-  add_phase_counters(state, t0, sys.timers(), steps);
+  bench::add_phase_counters(state, t0, sys.timers(), steps);
   state.counters["rebuilds_per_step"] =
       static_cast<double>(sys.neighbors()->builds() - builds0) / steps;
   state.counters["reorders_per_step"] = static_cast<double>(sys.reorders() - reorders0) / steps;

@@ -1,5 +1,5 @@
 #pragma once
-// What the engine benchmarks share: the timed loop of steps and its rate counters.
+// What the engine benchmarks share: the timed loop of steps, its rate and phase counters.
 #include <benchmark/benchmark.h>
 
 #include "mdem/integrate/system.h"
@@ -17,6 +17,14 @@ inline double timed_steps(benchmark::State& state, System& sys, long per_iterati
       benchmark::Counter(n * steps, benchmark::Counter::kIsRate);
   state.counters["elements"] = n;
   return steps;
+}
+
+// The step's time split by phase (System::timers()), in ms per step, over the timed steps.
+inline void add_phase_counters(benchmark::State& state, const StepTimers& before,
+                               const StepTimers& after, double steps) {
+  state.counters["pair_ms"] = (after.pair_s - before.pair_s) / steps * 1e3;
+  state.counters["neighbor_ms"] = (after.neighbor_s - before.neighbor_s) / steps * 1e3;
+  state.counters["integrate_ms"] = (after.integrate_s - before.integrate_s) / steps * 1e3;
 }
 
 }  // namespace mdem::bench

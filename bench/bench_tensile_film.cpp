@@ -14,10 +14,12 @@
 // 20), zeroes its motion and relaxes it for R ps (default 100) at a step picked anew, then writes
 // DIR/medium_seed13_nps<N>.state. The benchmark reads MDEM_TENSILE_FILM_DIR (default: the
 // working directory); without a state file it says so and steps the film as generated
-// (relaxed_ps 0 in its counters). Counters: element_steps_per_s, the half pairs per segment
-// within the vdW cutoff (4T = 5.424 nm; tensile.md §4.1: medium 14.8 ready-to-relax, ≈ 22
-// relaxed), the listed pairs per element, and the relaxation the state file had (relaxed_ps).
-// BM_AlignedPairCount times the tensile job's per-frame aligned-pair count (below).
+// (relaxed_ps 0 in its counters). 80 steps are timed (4 × 20: a few neighbour-list rebuilds).
+// Counters: element_steps_per_s, the step's phases (pair_ms, neighbor_ms, integrate_ms), the half
+// pairs per segment within the vdW cutoff (4T = 5.424 nm; tensile.md §4.1: medium 14.8
+// ready-to-relax, ≈ 22 relaxed), the listed pairs per element, and the relaxation the state file
+// had (relaxed_ps). BM_AlignedPairCount times the tensile job's per-frame aligned-pair count
+// (below).
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -34,6 +36,7 @@
 #include <utility>
 #include <vector>
 
+#include "bench_support.h"
 #include "mdem/core/units.h"
 #include "mdem/force/bond/parallel_bond.h"
 #include "mdem/force/contact/anisotropic_vdw.h"
@@ -198,12 +201,10 @@ void BM_RelaxedMediumFilm(benchmark::State& state) {
   set.threads = static_cast<int>(state.range(0));
   auto sys = tensile_film_system(f.el, set, kDashpot, rest.get());
   sys->run(5);  // warm-up
-  const long steps0 = sys->steps();
-  for (auto _ : state) sys->run(5);
+  const StepTimers t0 = sys->timers();
+  const double steps = bench::timed_steps(state, *sys, 20);
+  bench::add_phase_counters(state, t0, sys->timers(), steps);
   const double n = static_cast<double>(sys->elements().size());
-  state.counters["element_steps_per_s"] = benchmark::Counter(
-      n * static_cast<double>(sys->steps() - steps0), benchmark::Counter::kIsRate);
-  state.counters["elements"] = n;
   state.counters["dt_fs"] = sys->dt() * 1e3;
   state.counters["relaxed_ps"] = f.relax_ps;
   state.counters["half_pairs_per_segment"] = pairs_per_segment(*sys);
@@ -215,7 +216,7 @@ BENCHMARK(BM_RelaxedMediumFilm)
     ->ArgsProduct({{1, 2}, {0, 1}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond)
-    ->Iterations(2);
+    ->Iterations(4);
 
 // The tensile job's per-frame aligned-pair count on the README's film (100 × 100 × 11 nm, 30 tubes
 // × 70 segments, seed 1, after 200 pre-relaxation steps): kept:0 builds a list of its own
