@@ -95,22 +95,27 @@ inline JobInfo wait_for_checkpoint(const DaemonProcess& d, const std::string& id
   return wait_for(d, id, [&](const JobInfo&) { return fs::exists(ckpt); });
 }
 
-// Lets job `id` (checkpointing every 0.2 s) run past step 2000 and checkpoint, then kill -9s the
-// daemon; the job's checkpoint file (left in place). The daemon records a checkpoint in its
-// database only after the file is in place, so a kill right after the file appears can find
-// none recorded and restart the job from step 0 (a CI run failed so): it waits for the file to
-// be replaced once more, by which time the first one is recorded.
-inline fs::path kill_after_checkpoint(DaemonProcess& d, const std::string& id) {
-  wait_for(d, id, [](const JobInfo& j) { return j.step() > 2000; });
+// Waits until job `id` has a checkpoint the daemon has recorded. The daemon records a checkpoint
+// in its database only after the file is in place, so a kill right after the file appears can
+// find none recorded and restart the job from step 0 (CI runs failed so, twice): this waits for
+// the file to be replaced once more, by which time the first one is recorded.
+inline JobInfo wait_for_recorded_checkpoint(const DaemonProcess& d, const std::string& id) {
   wait_for_checkpoint(d, id);
   const fs::path file = checkpoint_path(d, id);
   std::error_code ec;
   const auto first = fs::last_write_time(file, ec);
-  wait_for(d, id, [&](const JobInfo&) {
+  return wait_for(d, id, [&](const JobInfo&) {
     std::error_code e;
     const auto now = fs::last_write_time(file, e);
     return !e && now != first;
   });
+}
+
+// Lets job `id` (checkpointing every 0.2 s) run past step 2000 and checkpoint, then kill -9s the
+// daemon; the job's checkpoint file (left in place).
+inline fs::path kill_after_checkpoint(DaemonProcess& d, const std::string& id) {
+  wait_for(d, id, [](const JobInfo& j) { return j.step() > 2000; });
+  wait_for_recorded_checkpoint(d, id);
   d.kill9();
   const fs::path ckpt = checkpoint_path(d, id);
   EXPECT_TRUE(fs::exists(ckpt)) << ckpt;

@@ -34,8 +34,8 @@ TEST(ServerPacking, KillDashNineWhilePackingResumesToIdenticalResults) {
   const auto ref_ev = watch(d, kAliceToken, ref, 1);
 
   const std::string id = submit_ok(d, kAliceToken, "victim", packing_spec());
-  // Killed as soon as the first checkpoint exists: still packing (no frame logged yet).
-  const JobInfo before = wait_for_checkpoint(d, id);
+  // Killed as soon as a recorded checkpoint exists: still packing (no frame logged yet).
+  const JobInfo before = wait_for_recorded_checkpoint(d, id);
   d.kill9();
   d.start();
   const JobInfo after = wait_finished(d, id, 300);
