@@ -286,7 +286,7 @@ TEST(Server, KillDashNineResumesToIdenticalResults) {
 
   const std::string id = submit_ok(d, kAliceToken, "victim", spec);
   const JobInfo before = wait_for(d, id, [](const JobInfo& j) { return j.step() > 3000; });
-  wait_for_checkpoint(d, id);
+  wait_for_recorded_checkpoint(d, id);
   d.kill9();
   d.start();
   const JobInfo after = wait_finished(d, id, 300);
