@@ -15,13 +15,18 @@
 // DIR/medium_seed13_nps<N>.state. The benchmark reads MDEM_TENSILE_FILM_DIR (default: the
 // working directory); without a state file it says so and steps the film as generated
 // (relaxed_ps 0 in its counters). 80 steps are timed (4 × 20: a few neighbour-list rebuilds).
-// Counters: element_steps_per_s, the step's phases (pair_ms, neighbor_ms, integrate_ms), the half
+// morton:1 runs the system in Morton memory order (IntegratorSettings::memory_order, reordered at
+// the first list build and every 10th rebuild; the jobs run as built). Counters:
+// element_steps_per_s, the step's phases (pair_ms, neighbor_ms, integrate_ms), the half
 // pairs per segment within the vdW cutoff (4T = 5.424 nm; tensile.md §4.1: medium 14.8
 // ready-to-relax, ≈ 22 relaxed), the listed pairs per element, and the relaxation the state file
-// had (relaxed_ps). BM_AlignedPairCount times the tensile job's per-frame aligned-pair count
+// had (relaxed_ps). BM_ClusterPairFill measures what a cluster-pair list would evaluate on the
+// same film (below); BM_AlignedPairCount times the tensile job's per-frame aligned-pair count
 // (below).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -199,6 +204,7 @@ void BM_RelaxedMediumFilm(benchmark::State& state) {
   const auto rest = rest_bonds(generated_film(nps));
   IntegratorSettings set;
   set.threads = static_cast<int>(state.range(0));
+  if (state.range(2) != 0) set.memory_order = MemoryOrder::Morton;
   auto sys = tensile_film_system(f.el, set, kDashpot, rest.get());
   sys->run(5);  // warm-up
   const StepTimers t0 = sys->timers();
@@ -212,11 +218,122 @@ void BM_RelaxedMediumFilm(benchmark::State& state) {
       static_cast<double>(sys->neighbors(*sys->find<AnisotropicVdw>())->pair_count()) / n;
 }
 BENCHMARK(BM_RelaxedMediumFilm)
-    ->ArgNames({"threads", "nps"})
-    ->ArgsProduct({{1, 2}, {0, 1}})
+    ->ArgNames({"threads", "nps", "morton"})
+    ->ArgsProduct({{1, 2}, {0, 1}, {0, 1}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond)
     ->Iterations(4);
+
+// Would a cluster-pair list (GROMACS's nbnxm: clusters of C elements, every pair of a listed
+// cluster pair evaluated in SIMD lanes, masked beyond the cutoff) beat the element-pair list on
+// this film? It trades the gather of each listed pair for evaluating pairs beyond the cutoff, so
+// it pays when the clusters' pairs are mostly within it. Clusters here are runs of C consecutive
+// segments of one tube (a tube's segments are consecutive in memory, as generated). Counters:
+// fill_exact, the pairs within the vdW cutoff over all pairs of the cluster pairs that hold at
+// least one (the best any cluster list can do); fill_listed, the same over the cluster pairs
+// whose bounding spheres are within cutoff + skin 0.5 nm (what a list built once per rebuild
+// holds); element_fill, within-cutoff over listed element pairs (today's list). No timing.
+void BM_ClusterPairFill(benchmark::State& state) {
+  const int C = static_cast<int>(state.range(0));
+  const FilmState& f = film(0);
+  IntegratorSettings set;
+  set.threads = 1;
+  auto sys = tensile_film_system(f.el, set, kDashpot, nullptr);
+  sys->initialize();
+  const auto* vdw = sys->find<AnisotropicVdw>();
+  const NeighborList& list = *sys->neighbors(*vdw);
+  const Elements& el = sys->elements();
+  const std::size_t n = el.size();
+  const double rc = vdw->cutoff(), rc2 = rc * rc, skin = 0.5;
+  // Clusters: [first, end) runs of at most C consecutive elements of one tube.
+  std::vector<std::uint32_t> cluster(n);
+  std::vector<std::pair<std::size_t, std::size_t>> run;
+  for (std::size_t i = 0; i < n;) {
+    std::size_t e = i + 1;
+    while (e < n && e - i < static_cast<std::size_t>(C) && el.tube[i] >= 0 &&
+           el.tube[e] == el.tube[i])
+      ++e;
+    for (std::size_t k = i; k < e; ++k) cluster[k] = static_cast<std::uint32_t>(run.size());
+    run.emplace_back(i, e);
+    i = e;
+  }
+  const std::size_t nc = run.size();
+  std::vector<Vec3> centre(nc);
+  std::vector<double> radius(nc);
+  double rmax = 0;
+  for (std::size_t a = 0; a < nc; ++a) {
+    Vec3 s = Vec3::Zero();
+    for (std::size_t k = run[a].first; k < run[a].second; ++k) s += el.x[k];
+    centre[a] = s / static_cast<double>(run[a].second - run[a].first);
+    for (std::size_t k = run[a].first; k < run[a].second; ++k)
+      radius[a] = std::max(radius[a], (el.x[k] - centre[a]).norm());
+    rmax = std::max(rmax, radius[a]);
+  }
+  const auto key = [](std::uint64_t a, std::uint64_t b) {
+    return a < b ? a << 32 | b : b << 32 | a;
+  };
+  const auto slots = [&](const std::vector<std::uint64_t>& pairs) {
+    double s = 0;
+    for (std::uint64_t p : pairs) {
+      const double na = static_cast<double>(run[p >> 32].second - run[p >> 32].first);
+      const double nb =
+          static_cast<double>(run[p & 0xffffffffu].second - run[p & 0xffffffffu].first);
+      s += (p >> 32) == (p & 0xffffffffu) ? na * (na - 1) / 2 : na * nb;
+    }
+    return s;
+  };
+  const auto unique = [](std::vector<std::uint64_t>& v) {
+    std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+  };
+  for (auto _ : state) {
+    double within = 0;
+    std::vector<std::uint64_t> exact, listed;
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::uint32_t m = list.offsets()[i]; m < list.offsets()[i + 1]; ++m) {
+        const std::uint32_t j = list.neighbors()[m];
+        if ((el.x[j] - el.x[i]).squaredNorm() < rc2) {
+          within += 1;
+          exact.push_back(key(cluster[i], cluster[j]));
+        }
+      }
+    unique(exact);
+    // Every cluster pair whose spheres come within rc + skin, from a grid over the centres.
+    const double cell = rc + skin + 2 * rmax;
+    std::map<std::array<long, 3>, std::vector<std::uint32_t>> grid;
+    const auto cell_of = [&](const Vec3& x) {
+      return std::array<long, 3>{static_cast<long>(std::floor(x.x() / cell)),
+                                 static_cast<long>(std::floor(x.y() / cell)),
+                                 static_cast<long>(std::floor(x.z() / cell))};
+    };
+    for (std::size_t a = 0; a < nc; ++a)
+      grid[cell_of(centre[a])].push_back(static_cast<std::uint32_t>(a));
+    for (const auto& [c, members] : grid)
+      for (long dx = -1; dx <= 1; ++dx)
+        for (long dy = -1; dy <= 1; ++dy)
+          for (long dz = -1; dz <= 1; ++dz) {
+            const auto it = grid.find({c[0] + dx, c[1] + dy, c[2] + dz});
+            if (it == grid.end()) continue;
+            for (std::uint32_t a : members)
+              for (std::uint32_t b : it->second)
+                if (b >= a && (centre[a] - centre[b]).norm() - radius[a] - radius[b] < rc + skin)
+                  listed.push_back(key(a, b));
+          }
+    unique(listed);
+    state.counters["clusters"] = static_cast<double>(nc);
+    state.counters["fill_exact"] = within / slots(exact);
+    state.counters["fill_listed"] = within / slots(listed);
+    state.counters["element_fill"] = within / static_cast<double>(list.pair_count());
+    state.counters["cluster_pairs_listed"] = static_cast<double>(listed.size());
+  }
+}
+BENCHMARK(BM_ClusterPairFill)
+    ->ArgName("cluster")
+    ->Arg(2)
+    ->Arg(4)
+    ->Arg(8)
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
 
 // The tensile job's per-frame aligned-pair count on the README's film (100 × 100 × 11 nm, 30 tubes
 // × 70 segments, seed 1, after 200 pre-relaxation steps): kept:0 builds a list of its own
