@@ -19,6 +19,7 @@
 #include "mdem/core/units.h"
 #include "mdem/force/bond/parallel_bond.h"
 #include "mdem/force/contact/anisotropic_vdw.h"
+#include "mdem/force/contact/np_cnt_contact.h"
 #include "mdem/force/damping/viscous_contact_damping.h"
 #include "mdem/integrate/system.h"
 #include "mdem/job/tensile_job.h"
@@ -263,20 +264,18 @@ void BM_SparseFilmIntegrator(benchmark::State& state) {
 }
 BENCHMARK(BM_SparseFilmIntegrator)->Apply(one_and_two_threads)->Iterations(20);
 
-// The vdW pair model alone on a relaxed film: one force evaluation over its own neighbour list
-// (built for it, with its exclusion). ns_per_pair is per listed pair (within cutoff + skin);
+// One pair model alone on a film: one force evaluation over its own neighbour list (built for
+// it, with its exclusion) per iteration. ns_per_pair is per listed pair (within cutoff + skin);
 // ns_per_interacting_pair per pair within the cutoff (the others are rejected by distance).
-void issue13_vdw(benchmark::State& state, bool dense) {
-  const Elements& el = relaxed_issue13_film(dense);
+void pair_model_evaluations(benchmark::State& state, const ForceModel& m, const Elements& el) {
   const int threads = static_cast<int>(state.range(0));
-  const AnisotropicVdw vdw;
-  const NeighborList nl = list_for(vdw, el);
+  const NeighborList nl = list_for(m, el);
   std::size_t within = 0;
-  const double rc2 = vdw.cutoff() * vdw.cutoff();
+  const double rc2 = m.cutoff() * m.cutoff();
   for (std::size_t i = 0; i < el.size(); ++i)
-    for (std::uint32_t m = nl.offsets()[i]; m < nl.offsets()[i + 1]; ++m)
-      within += (el.x[nl.neighbors()[m]] - el.x[i]).squaredNorm() < rc2;
-  time_evaluations(state, vdw, el, &nl, threads);
+    for (std::uint32_t k = nl.offsets()[i]; k < nl.offsets()[i + 1]; ++k)
+      within += (el.x[nl.neighbors()[k]] - el.x[i]).squaredNorm() < rc2;
+  time_evaluations(state, m, el, &nl, threads);
   const double evals = static_cast<double>(state.iterations());
   const double n = static_cast<double>(el.size());
   state.counters["ns_per_pair"] =
@@ -287,6 +286,12 @@ void issue13_vdw(benchmark::State& state, bool dense) {
                          benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.counters["pairs_per_element"] = static_cast<double>(nl.pair_count()) / n;
   state.counters["interacting_per_element"] = static_cast<double>(within) / n;
+}
+
+// The vdW pair model alone on issue 13's relaxed films.
+void issue13_vdw(benchmark::State& state, bool dense) {
+  const AnisotropicVdw vdw;
+  pair_model_evaluations(state, vdw, relaxed_issue13_film(dense));
 }
 void BM_DenseFilmVdw(benchmark::State& state) { issue13_vdw(state, true); }
 void BM_SparseFilmVdw(benchmark::State& state) { issue13_vdw(state, false); }
@@ -518,6 +523,19 @@ void BM_TensileSmallFilm(benchmark::State& state) {
   tensile_film_steps(state, FilmSize::Small, false, true);
 }
 BENCHMARK(BM_TensileSmallFilm)->Apply(one_and_two_threads)->Iterations(4);
+
+// The NP–CNT contact alone on Table 5-1's medium film with 4000 NPs (pre-relaxed as state:1
+// above), over its own list: evaluation:0 the scalar law, evaluation:1 the batched one (SIMD,
+// the default), in one run so the two compare on one machine state.
+void BM_TensileFilmNpCnt(benchmark::State& state) {
+  const NpCntContact np_cnt(
+      NpCntParams{}, state.range(1) != 0 ? NpCntEvaluation::Batched : NpCntEvaluation::Scalar);
+  pair_model_evaluations(state, np_cnt, tensile_film(FilmSize::Medium, true, true));
+}
+BENCHMARK(BM_TensileFilmNpCnt)
+    ->ArgNames({"threads", "evaluation"})
+    ->ArgsProduct({{1, 2}, {0, 1}})
+    ->UseRealTime();
 
 // Memory order (issue 13 item 3): full steps of issue 13's films as generated, their elements in
 // the generator's order (tube after tube, segments in order along each; the tubes themselves lie

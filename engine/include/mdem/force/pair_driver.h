@@ -75,6 +75,20 @@ struct PairBatch {
   alignas(64) double fx[kCapacity], fy[kCapacity], fz[kCapacity];
   alignas(64) double t1x[kCapacity], t1y[kCapacity], t1z[kCapacity];
   alignas(64) double t2x[kCapacity], t2y[kCapacity], t2z[kCapacity];
+
+  // Writes lane p's outputs from a scalar kernel's result (its f2 is −f1, as the batch assumes).
+  void store(int p, const PairForces& r) {
+    energy[p] = r.energy;
+    fx[p] = r.f1.x();
+    fy[p] = r.f1.y();
+    fz[p] = r.f1.z();
+    t1x[p] = r.t1.x();
+    t1y[p] = r.t1.y();
+    t1z[p] = r.t1.z();
+    t2x[p] = r.t2.x();
+    t2y[p] = r.t2.y();
+    t2z[p] = r.t2.z();
+  }
 };
 
 namespace pair_driver_detail {

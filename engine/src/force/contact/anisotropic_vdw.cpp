@@ -449,24 +449,11 @@ double vdw_separation(const VdwConstants& k, const Vec3& r, const Vec3& b1, cons
 
 namespace {
 
-void store(PairBatch& b, int p, const VdwPairResult& r) {
-  b.energy[p] = r.energy;
-  b.fx[p] = r.f1.x();
-  b.fy[p] = r.f1.y();
-  b.fz[p] = r.f1.z();
-  b.t1x[p] = r.t1.x();
-  b.t1y[p] = r.t1.y();
-  b.t1z[p] = r.t1.z();
-  b.t2x[p] = r.t2.x();
-  b.t2y[p] = r.t2.y();
-  b.t2z[p] = r.t2.z();
-}
-
 // Pair p of the batch by the scalar kernel (zero beyond the cutoff).
 void scalar_lane(const VdwConstants& k, const Vec3* axes, PairBatch& b, int p) {
   VdwPairResult r;
   eval_pair(k, Vec3(b.dx[p], b.dy[p], b.dz[p]), axes[b.i[p]], axes[b.j[p]], r);
-  store(b, p, r);
+  b.store(p, r);
 }
 
 // The batch's pairs, with the axes of segments i, j at axes[i], axes[j]: gathered into SoA lanes

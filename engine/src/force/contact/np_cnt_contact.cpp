@@ -15,6 +15,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "force/contact/np_cnt_simd.h"
+
 namespace mdem {
 
 namespace {
@@ -23,8 +25,9 @@ constexpr double kCoincident2 = 1e-24;  // R² below which the centres count as 
 
 }  // namespace
 
-NpCntKernel::NpCntKernel(NpCntParams p)
+NpCntKernel::NpCntKernel(NpCntParams p, NpCntEvaluation e)
     : p_(p),
+      eval_(e),
       delta_(p.C),
       fc_{3.0 * p.segment_length, p.segment_length},
       v_("NP-CNT contact", p.epsilon, p.A, p.B, p.alpha, p.beta, p.d_min) {
@@ -34,6 +37,7 @@ NpCntKernel::NpCntKernel(NpCntParams p)
   if (!std::isfinite(p.segment_length) || !(p.segment_length > 0))
     throw std::invalid_argument("NP-CNT contact segment_length must be finite and > 0 (nm), got " +
                                 std::to_string(p.segment_length));
+  v_(p.d_min, v_min_, dv_min_);
 }
 
 bool NpCntKernel::law(const Vec3& d, const Vec3& b, double& energy, Vec3& f_np, Vec3& t_seg) const {
@@ -94,6 +98,76 @@ bool NpCntKernel::pair(const Elements& el, std::size_t i, std::size_t j, const V
   }
   return true;
 }
+
+void NpCntKernel::batch(const Elements& el, PairBatch& b) const {
+  constexpr int kCap = PairBatch::kCapacity;
+  constexpr int kWidth = static_cast<int>(np_cnt_simd::kMaxLanes);
+  static_assert(kCap % kWidth == 0);
+  // The law's d = x_NP − x_seg and the segment's axis per lane; the batch's d is x_j − x_i.
+  alignas(64) double dx[kCap], dy[kCap], dz[kCap], bx[kCap], by[kCap], bz[kCap];
+  alignas(64) double e[kCap], fx[kCap], fy[kCap], fz[kCap], tx[kCap], ty[kCap], tz[kCap];
+  bool np_is_i[kCap];
+  for (int p = 0; p < b.n; ++p) {
+    const bool np_i = el.kind[b.i[p]] == ElementKind::Nanoparticle;
+    np_is_i[p] = np_i;
+    const double s = np_i ? -1.0 : 1.0;
+    dx[p] = s * b.dx[p];
+    dy[p] = s * b.dy[p];
+    dz[p] = s * b.dz[p];
+    const Vec3 axis = el.axis(np_i ? b.j[p] : b.i[p]);
+    bx[p] = axis.x();
+    by[p] = axis.y();
+    bz[p] = axis.z();
+  }
+  const int lanes = (b.n + kWidth - 1) / kWidth * kWidth;
+  for (int p = b.n; p < lanes; ++p) {  // padding: beyond the cutoff, zero outputs
+    dx[p] = 2.0 * p_.cutoff();
+    dy[p] = dz[p] = 0.0;
+    bx[p] = 1.0;
+    by[p] = bz[p] = 0.0;
+  }
+  const auto& a = delta_.coefficients();
+  const np_cnt_simd::Constants k{p_.cutoff() * p_.cutoff(),
+                                 fc_.start,
+                                 fc_.width,
+                                 1.0 / p_.rho,
+                                 a,
+                                 4.0 * p_.epsilon,
+                                 p_.A,
+                                 p_.B,
+                                 p_.alpha,
+                                 p_.beta,
+                                 p_.d_min,
+                                 v_min_,
+                                 dv_min_};
+  const np_cnt_simd::Lanes l{dx, dy, dz, bx, by, bz, e, fx, fy, fz, tx, ty, tz};
+  const bool coincident = np_cnt_simd::evaluate(k, l, static_cast<std::size_t>(lanes));
+  for (int p = 0; p < b.n; ++p) {
+    if (coincident && dx[p] * dx[p] + dy[p] * dy[p] + dz[p] * dz[p] < kCoincident2) {
+      PairForces r;
+      pair(el, b.i[p], b.j[p], Vec3(b.dx[p], b.dy[p], b.dz[p]), r);
+      b.store(p, r);
+      continue;
+    }
+    // Force on i: the NP's when i is the NP, the segment's (−) otherwise; the torque is the
+    // segment's, on whichever of i, j it is.
+    const double s = np_is_i[p] ? 1.0 : -1.0;
+    b.energy[p] = e[p];
+    b.fx[p] = s * fx[p];
+    b.fy[p] = s * fy[p];
+    b.fz[p] = s * fz[p];
+    double* const seg[3] = {np_is_i[p] ? b.t2x : b.t1x, np_is_i[p] ? b.t2y : b.t1y,
+                            np_is_i[p] ? b.t2z : b.t1z};
+    double* const np[3] = {np_is_i[p] ? b.t1x : b.t2x, np_is_i[p] ? b.t1y : b.t2y,
+                           np_is_i[p] ? b.t1z : b.t2z};
+    seg[0][p] = tx[p];
+    seg[1][p] = ty[p];
+    seg[2][p] = tz[p];
+    np[0][p] = np[1][p] = np[2][p] = 0.0;
+  }
+}
+
+const char* np_cnt_simd_target() { return np_cnt_simd::target_name(); }
 
 void NpCntKernel::stiffness(const Elements& el, std::size_t i, std::size_t j, const Vec3& d,
                             StiffnessSums& s) const {

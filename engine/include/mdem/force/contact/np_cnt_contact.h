@@ -32,6 +32,10 @@ struct NpCntParams {
   double cutoff() const { return 4.0 * segment_length; }
 };
 
+// How NpCntKernel evaluates the driver's pairs: over batches with the vectorised law
+// (np_cnt_simd.cpp, the default) or pair by pair with the scalar law (the reference).
+enum class NpCntEvaluation { Batched, Scalar };
+
 // The NP–CNT pair kernel (pair_driver.h): Nanoparticle–CntSegment pairs, in either order.
 class NpCntKernel {
  public:
@@ -41,7 +45,7 @@ class NpCntKernel {
   static constexpr EnergyTerm kTerm = EnergyTerm::NpCnt;
 
   // Throws std::invalid_argument naming the parameter and its allowed range.
-  explicit NpCntKernel(NpCntParams p = {});
+  explicit NpCntKernel(NpCntParams p = {}, NpCntEvaluation e = NpCntEvaluation::Batched);
   std::string_view name() const { return "np_cnt_contact"; }
   double cutoff() const { return p_.cutoff(); }
   KindPairs kinds() const {
@@ -51,6 +55,14 @@ class NpCntKernel {
     return !kinds().has(el.kind[i], el.kind[j]);
   }
   bool pair(const Elements& el, std::size_t i, std::size_t j, const Vec3& d, PairForces& out) const;
+  bool batched() const { return eval_ == NpCntEvaluation::Batched; }
+  // The batch's pairs by the vectorised law; a lane with coincident centres by pair().
+  void batch(const Elements& el, PairBatch& b) const;
+  // batch() reads the kind of element j and, for a segment, its orientation.
+  void touch(const Elements& el, std::uint32_t j) const {
+    __builtin_prefetch(el.q.data() + j, 0, 3);
+    __builtin_prefetch(el.kind.data() + j, 0, 3);
+  }
   // Radial bound |∂²U/∂R²| at the pair's δ and at δ's smallest value (the side-on law), on both
   // elements; the segment's rotational bound from D's angular rate (vdw_shape max_log_slope).
   void stiffness(const Elements& el, std::size_t i, std::size_t j, const Vec3& d,
@@ -72,16 +84,22 @@ class NpCntKernel {
   // d = x_NP − x_seg; writes U, the NP's force (f_np), the segment's torque (t_seg).
   bool law(const Vec3& d, const Vec3& b, double& energy, Vec3& f_np, Vec3& t_seg) const;
   NpCntParams p_;
+  NpCntEvaluation eval_;
   vdw_shape::DeltaPolynomial delta_;
   vdw_shape::SmoothstepCutoff fc_;
   vdw_shape::TwoPowerPotential v_;
+  double v_min_ = 0, dv_min_ = 0;  // V and V' at d_min, where the linear branch starts
 };
+
+// The instruction set the batched law runs on this CPU (e.g. "AVX3", "AVX2", "EMU128").
+const char* np_cnt_simd_target();
 
 extern template class PairModel<NpCntKernel>;
 
 class NpCntContact final : public PairModel<NpCntKernel> {
  public:
-  explicit NpCntContact(NpCntParams p = {}) : PairModel<NpCntKernel>(p) {}
+  explicit NpCntContact(NpCntParams p = {}, NpCntEvaluation e = NpCntEvaluation::Batched)
+      : PairModel<NpCntKernel>(p, e) {}
   const NpCntParams& params() const { return k_.params(); }
 };
 

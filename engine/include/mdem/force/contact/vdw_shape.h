@@ -32,6 +32,8 @@ class DeltaPolynomial {
   double max_log_slope() const { return max_log_slope_; }
   // min over u ∈ [0, 1] of δ (1 for the published C, at θ = 90°).
   double min_delta() const { return min_delta_; }
+  // δ = Σ_k a_k y^k, y = 2u − 1 (for vectorised copies of the polynomial).
+  const std::array<double, 6>& coefficients() const { return a_; }
 
  private:
   std::array<double, 6> a_{};

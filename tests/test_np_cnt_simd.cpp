@@ -1,0 +1,253 @@
+// The batched (vectorised) NP–CNT law against the scalar law (NpCntEvaluation::Scalar, the
+// reference): isolated NP–segment pairs covering every branch of the law in both element orders,
+// on every instruction set this CPU runs; and a film of tubes and NPs through the pair driver at
+// 1 and 2 threads, with the batched sums' determinism and momentum balances.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <random>
+#include <vector>
+
+#include "hwy/targets.h"
+#include "mdem/core/cnt.h"
+#include "mdem/force/contact/np_cnt_contact.h"
+#include "mdem/neighbor/neighbor_list.h"
+#include "mdem/scene/nanoparticle.h"
+#include "mdem/scene/tube_builder.h"
+
+using namespace mdem;
+
+namespace {
+
+constexpr double kRoundOff = 1e-12;
+
+Vec3 random_unit(std::mt19937_64& rng) {
+  std::normal_distribution<double> g;
+  return Vec3(g(rng), g(rng), g(rng)).normalized();
+}
+
+// Pair classes the random set must reach (each is asserted to occur).
+struct Coverage {
+  int linear = 0, power = 0, ramp = 0, beyond = 0, coincident = 0, end_on = 0, np_first = 0,
+      segment_first = 0;
+};
+
+// n NP–segment pairs 40 nm apart along y (far beyond the 5.4 nm cutoff, so each element's force
+// is its own pair's), NP first in every other pair: centre distances from coincident through the
+// linear branch and the well to beyond the cutoff, directions random or near the segment's axis.
+struct PairSet {
+  Elements el;
+  std::vector<Vec3> x_np, x_seg, axis;
+  std::vector<std::size_t> np, seg;  // element indices of pair m
+};
+
+PairSet isolated_pairs(int n, unsigned seed, Coverage& cov) {
+  const NpCntParams p;
+  const NpCntKernel k(p, NpCntEvaluation::Scalar);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  PairSet s;
+  for (int m = 0; m < n; ++m) {
+    const Vec3 centre(0.0, 40.0 * m, 0.0);
+    const Vec3 axis = random_unit(rng);
+    Vec3 dir = random_unit(rng);
+    if (m % 5 == 0) dir = (axis + 0.05 * random_unit(rng)).normalized();  // end-on
+    double R;
+    const int kind = m % 10;
+    if (kind == 0)
+      R = std::pow(10.0, -14.0 + 8.0 * u01(rng));  // 1e-14 .. 1e-6 nm: coincident-ish
+    else if (kind < 4)
+      R = 0.05 + 3.0 * u01(rng);  // overlap: mostly the linear branch
+    else
+      R = 1.15 * p.cutoff() * u01(rng);  // through the well and the ramp, to beyond the cutoff
+    const Vec3 x_np = centre + R * dir;
+    const bool np_first = m % 2 == 0;
+    if (np_first) {
+      s.np.push_back(s.el.add(nanoparticle(x_np)));
+      s.seg.push_back(s.el.add(cnt_segment(centre, quat_from_axis(axis), m, 0)));
+      ++cov.np_first;
+    } else {
+      s.seg.push_back(s.el.add(cnt_segment(centre, quat_from_axis(axis), m, 0)));
+      s.np.push_back(s.el.add(nanoparticle(x_np)));
+      ++cov.segment_first;
+    }
+    s.x_np.push_back(x_np);
+    s.x_seg.push_back(centre);
+    s.axis.push_back(s.el.axis(s.seg.back()));
+    if (R >= p.cutoff()) {
+      ++cov.beyond;
+      continue;
+    }
+    if (R * R < 1e-24) ++cov.coincident;
+    if (R > 3 * p.segment_length) ++cov.ramp;
+    if (std::abs(axis.dot(dir)) > 0.99) ++cov.end_on;
+    if (k.separation(x_np, centre, s.axis.back()) < p.d_min)
+      ++cov.linear;
+    else
+      ++cov.power;
+  }
+  return s;
+}
+
+struct Forces {
+  std::vector<Vec3> f, t;
+  double energy = 0;
+};
+
+Forces evaluate(const NpCntContact& m, const Elements& el, int threads,
+                const Domain& domain = Domain{}) {
+  NeighborList nl(m.cutoff(), 0.5, domain);
+  nl.set_exclusion(
+      [&m](const Elements& e, std::size_t i, std::size_t j) { return m.excludes(e, i, j); });
+  nl.set_owner(&m);
+  nl.build(el);
+  ForceSink sink;
+  sink.resize(el.size(), threads, false);
+  m.compute(el, &nl, sink);
+  Forces out;
+  out.f.resize(el.size());
+  out.t.resize(el.size());
+  std::vector<Vec3> fd, td;
+  out.energy = sink.reduce(out.f, out.t, fd, td).total_stored();
+  return out;
+}
+
+// Largest |batched − scalar| of a pair's forces and torques, relative to the pair's scale:
+// |U| + |f| + |τ| of the scalar law (eV, lengths in nm, as test_vdw_simd's: at the well's minimum
+// the force is the difference of two terms ~100× its size), at least 1e-4 (1e-3 of the well's
+// depth): near the end of the cutoff ramp f_c ≈ 3(1 − t)², t = (R − 3T)/T, turns the last-bit
+// difference of R (the SIMD |d|² is fused) into ~1e-13 of f_c, and such a pair's own size into
+// nothing. Also checks the total energy against Σ|U| of the pairs, and that the NP gets no torque.
+double max_relative_difference(const PairSet& s) {
+  const NpCntContact batched;
+  const NpCntContact scalar(NpCntParams{}, NpCntEvaluation::Scalar);
+  const Forces ref = evaluate(scalar, s.el, 1);
+  const Forces got = evaluate(batched, s.el, 1);
+  const NpCntKernel law(NpCntParams{}, NpCntEvaluation::Scalar);
+  double worst = 0.0, sum_abs_u = 0.0;
+  for (std::size_t m = 0; m < s.np.size(); ++m) {
+    const std::size_t a = s.np[m], b = s.seg[m];
+    const PairForces one = law.evaluate(s.x_np[m], s.x_seg[m], s.axis[m]);
+    sum_abs_u += std::abs(one.energy);
+    // The scalar driver's sums are the single-pair law's (one pair per element).
+    EXPECT_EQ(ref.f[a], one.f1) << "pair " << m;
+    const double scale = std::abs(one.energy) + ref.f[a].norm() + ref.t[b].norm();
+    const double diff = std::max(
+        {(got.f[a] - ref.f[a]).norm(), (got.f[b] - ref.f[b]).norm(), (got.t[b] - ref.t[b]).norm()});
+    EXPECT_EQ(got.t[a], Vec3::Zero()) << "pair " << m << ": the NP takes no torque";
+    if (scale == 0.0 && one.energy == 0.0) {
+      EXPECT_EQ(diff, 0.0) << "pair " << m << " (beyond the cutoff) must give exact zeros";
+      continue;
+    }
+    worst = std::max(worst, diff / std::max(scale, 1e-4));
+  }
+  EXPECT_NE(ref.energy, 0.0);
+  EXPECT_NEAR(got.energy, ref.energy, kRoundOff * sum_abs_u);
+  return worst;
+}
+
+void expect_covered(const Coverage& c) {
+  EXPECT_GT(c.linear, 100);
+  EXPECT_GT(c.power, 100);
+  EXPECT_GT(c.ramp, 100);
+  EXPECT_GT(c.beyond, 10);
+  EXPECT_GT(c.coincident, 10);
+  EXPECT_GT(c.end_on, 100);
+  EXPECT_GT(c.np_first, 100);
+  EXPECT_GT(c.segment_first, 100);
+}
+
+TEST(NpCntSimd, IsolatedPairsEqualTheScalarLaw) {
+  Coverage cov;
+  const PairSet s = isolated_pairs(20000, 1, cov);
+  const double worst = max_relative_difference(s);
+  EXPECT_LT(worst, kRoundOff) << "on " << np_cnt_simd_target();
+  expect_covered(cov);
+  std::printf("batched NP-CNT law on %s: largest relative difference %.3g\n", np_cnt_simd_target(),
+              worst);
+}
+
+// Every instruction set the build carries and this CPU runs, forced in turn.
+TEST(NpCntSimd, EveryInstructionSetEqualsTheScalarLaw) {
+  Coverage cov;
+  const PairSet s = isolated_pairs(4000, 2, cov);
+  const std::vector<std::int64_t> targets = hwy::SupportedAndGeneratedTargets();
+  EXPECT_GE(targets.size(), 2u);  // at least a vector set and the plain C++ fallback
+  for (std::int64_t target : targets) {
+    hwy::SetSupportedTargetsForTest(target);
+    EXPECT_STREQ(np_cnt_simd_target(), hwy::TargetName(target));
+    const double worst = max_relative_difference(s);
+    EXPECT_LT(worst, kRoundOff) << hwy::TargetName(target);
+    std::printf("%s: largest relative difference %.3g\n", hwy::TargetName(target), worst);
+  }
+  hwy::SetSupportedTargetsForTest(0);
+}
+
+// A film of short tubes with NPs among them (some overlapping, so the linear branch is reached).
+Elements film_with_nps(unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-20.0, 20.0), z(-2.0, 2.0);
+  Elements el;
+  for (int t = 0; t < 40; ++t) {
+    Vec3 dir = random_unit(rng);
+    dir.z() *= 0.1;
+    dir.normalize();
+    const Vec3 start(u(rng), u(rng), z(rng));
+    for (int s = 0; s < 25; ++s)
+      el.add(cnt_segment(start + s * cnt::kSegmentLength * dir, quat_from_axis(dir), t, s));
+  }
+  for (int k = 0; k < 150; ++k) el.add(nanoparticle(Vec3(u(rng), u(rng), z(rng))));
+  return el;
+}
+
+double relative_difference(const Forces& a, const Forces& b) {
+  double scale = 0.0, diff = 0.0;
+  for (std::size_t i = 0; i < a.f.size(); ++i) {
+    scale = std::max({scale, a.f[i].norm(), a.t[i].norm()});
+    diff = std::max({diff, (a.f[i] - b.f[i]).norm(), (a.t[i] - b.t[i]).norm()});
+  }
+  return diff / scale;
+}
+
+void compare_on_film(const Domain& domain) {
+  const Elements el = film_with_nps(7);  // 1000 segments, 150 NPs
+  const NpCntContact batched;
+  const NpCntContact scalar(NpCntParams{}, NpCntEvaluation::Scalar);
+  for (int threads : {1, 2}) {
+    const Forces ref = evaluate(scalar, el, threads, domain);
+    const Forces got = evaluate(batched, el, threads, domain);
+    EXPECT_NE(ref.energy, 0.0);  // pairs interact: the comparison is not of zeros
+    EXPECT_LT(relative_difference(ref, got), kRoundOff) << threads << " threads";
+    EXPECT_NEAR(got.energy, ref.energy, kRoundOff * std::abs(ref.energy));
+    // Fixed summation order: the same bits on a second evaluation.
+    const Forces again = evaluate(batched, el, threads, domain);
+    EXPECT_EQ(again.energy, got.energy);
+    for (std::size_t i = 0; i < el.size(); ++i) {
+      ASSERT_EQ(again.f[i], got.f[i]) << "element " << i;
+      ASSERT_EQ(again.t[i], got.t[i]) << "element " << i;
+    }
+  }
+  // Newton's third law and the balance of angular momentum hold for the batched sums.
+  const Forces got = evaluate(batched, el, 2, domain);
+  Vec3 f_sum = Vec3::Zero(), m_sum = Vec3::Zero();
+  double f_scale = 0;
+  for (std::size_t i = 0; i < el.size(); ++i) {
+    f_sum += got.f[i];
+    f_scale = std::max(f_scale, got.f[i].norm());
+    if (!domain.any_periodic()) m_sum += el.x[i].cross(got.f[i]) + got.t[i];
+  }
+  EXPECT_GT(f_scale, 0.0);
+  EXPECT_LT(f_sum.norm(), 1e-10 * f_scale * el.size());
+  EXPECT_LT(m_sum.norm(), 1e-10 * f_scale * 40.0 * el.size());
+}
+
+TEST(NpCntSimd, FilmForcesEqualTheScalarLawOpenDomain) { compare_on_film(Domain{}); }
+
+TEST(NpCntSimd, FilmForcesEqualTheScalarLawPeriodic) {
+  compare_on_film(Domain(Vec3(-20, -20, -50), Vec3(20, 20, 50), {true, true, false}));
+}
+
+}  // namespace
