@@ -20,6 +20,7 @@
 
 #include "mdem/force/contact/np_cnt_contact.h"
 #include "mdem/force/contact/np_np_contact.h"
+#include "mdem/force/damping/dashpot_law.h"
 #include "mdem/force/pair_driver.h"
 
 namespace mdem {
@@ -41,25 +42,39 @@ class NpDashpotKernel {
 
   // name, owner: static strings. Throws std::invalid_argument for a ratio outside [0, 10], a
   // non-positive stiffness or cutoff.
-  NpDashpotKernel(std::string_view name, std::string_view owner, KindPairs kinds,
-                  NpDampingParams p);
+  NpDashpotKernel(std::string_view name, std::string_view owner, KindPairs kinds, NpDampingParams p,
+                  DashpotEvaluation e = DashpotEvaluation::Batched);
   std::string_view name() const { return name_; }
   std::string_view owner() const { return owner_; }
+  // The NP–CNT contact's dashpot runs in one pass with it (compute_with); the NP–NP contact's,
+  // whose owner is another kernel, is not paired and runs its own.
+  using Owner = NpCntKernel;
   bool active() const { return p_.ratio != 0; }
   double cutoff() const { return p_.cutoff; }
   KindPairs kinds() const { return kinds_; }
   bool excludes(const Elements& el, std::size_t i, std::size_t j) const {
     return !kinds_.has(el.kind[i], el.kind[j]);
   }
-  bool pair(const Elements& el, std::size_t i, std::size_t j, const Vec3& d, PairForces& out) const;
+  bool pair(const Elements& el, std::size_t i, std::size_t j, const Vec3& d,
+            PairForces& out) const {
+    return dashpot_pair(el, i, j, d, p_.ratio, p_.stiffness, p_.cutoff, p_.shear, out);
+  }
+  bool batched() const { return eval_ == DashpotEvaluation::Batched; }
+  void batch(const Elements& el, PairBatch& b) const {
+    dashpot_batch(el, b, p_.ratio, p_.stiffness, p_.shear);
+  }
+  void touch(const Elements& el, std::uint32_t j) const { dashpot_touch(el, j); }
   void stiffness(const Elements& el, std::size_t i, std::size_t j, const Vec3& d,
-                 StiffnessSums& s) const;
+                 StiffnessSums& s) const {
+    dashpot_stiffness(el, i, j, d, p_.ratio, p_.stiffness, p_.cutoff, s);
+  }
   const NpDampingParams& params() const { return p_; }
 
  private:
   std::string_view name_, owner_;
   KindPairs kinds_;
   NpDampingParams p_;
+  DashpotEvaluation eval_;
 };
 
 // The dashpots of the NP–CNT and NP–NP contacts with parameters `contact`: cutoff the contact's,

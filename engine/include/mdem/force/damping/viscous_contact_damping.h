@@ -18,15 +18,10 @@
 // with the thesis on gripped films (the tensile job), where no body turns as a whole: it damps
 // sliding at a crossing directly, and conserves linear momentum but not angular momentum.
 #include "mdem/force/contact/anisotropic_vdw.h"
+#include "mdem/force/damping/dashpot_law.h"
 #include "mdem/force/pair_driver.h"
 
 namespace mdem {
-
-// How ContactDampingKernel evaluates its pairs. Batched (the default): in batches of pairs in
-// structure-of-arrays form with SIMD on the widest instruction set of the CPU chosen at run time
-// (contact_damping_simd_target()); equal to the scalar kernel to round-off, not bit for bit.
-// Scalar: one pair at a time (pair()), the reference.
-enum class DashpotEvaluation { Batched, Scalar };
 
 struct ContactDampingParams {
   double ratio = 0.03;            // ψ (thesis: 0.03)
@@ -62,27 +57,27 @@ class ContactDampingKernel {
   bool excludes(const Elements& el, std::size_t i, std::size_t j) const {
     return el.cnt_pair_excluded(i, j, p_.intra_tube_exclusion);
   }
-  bool pair(const Elements& el, std::size_t i, std::size_t j, const Vec3& d, PairForces& out) const;
+  bool pair(const Elements& el, std::size_t i, std::size_t j, const Vec3& d,
+            PairForces& out) const {
+    return dashpot_pair(el, i, j, d, p_.ratio, p_.stiffness, p_.cutoff, p_.shear, out);
+  }
   bool batched() const { return eval_ == DashpotEvaluation::Batched; }
-  void batch(const Elements& el, PairBatch& b) const;
+  void batch(const Elements& el, PairBatch& b) const {
+    dashpot_batch(el, b, p_.ratio, p_.stiffness, p_.shear);
+  }
   // batch() reads v_j and m_j of an element of another tube, a cache miss each: fetched while
   // the driver gathers the rest of the batch.
-  void touch(const Elements& el, std::uint32_t j) const {
-    pair_driver_detail::prefetch_vec3_end<0>(el.v.data() + j);
-    __builtin_prefetch(el.mass.data() + j, 0, 3);
-  }
+  void touch(const Elements& el, std::uint32_t j) const { dashpot_touch(el, j); }
   void stiffness(const Elements& el, std::size_t i, std::size_t j, const Vec3& d,
-                 StiffnessSums& s) const;
+                 StiffnessSums& s) const {
+    dashpot_stiffness(el, i, j, d, p_.ratio, p_.stiffness, p_.cutoff, s);
+  }
   const ContactDampingParams& params() const { return p_; }
 
  private:
-  double coefficient(const Elements& el, std::size_t i, std::size_t j) const;
   ContactDampingParams p_;
   DashpotEvaluation eval_;
 };
-
-// The instruction set of the batched path on this CPU (Highway's name: "AVX3", "AVX2", ...).
-const char* contact_damping_simd_target();
 
 extern template class PairModel<ContactDampingKernel>;
 

@@ -1,7 +1,9 @@
-// The batched (vectorised) NP–CNT law against the scalar law (NpCntEvaluation::Scalar, the
-// reference): isolated NP–segment pairs covering every branch of the law in both element orders,
-// on every instruction set this CPU runs; and a film of tubes and NPs through the pair driver at
-// 1 and 2 threads, with the batched sums' determinism and momentum balances.
+// The NP kernels in batches against their scalar references. The NP–CNT law (NpCntEvaluation::
+// Scalar): isolated NP–segment pairs covering every branch of the law in both element orders, on
+// every instruction set this CPU runs; a film of tubes and NPs through the pair driver at 1 and 2
+// threads, with the batched sums' determinism and momentum balances. The NP dashpots
+// (DashpotEvaluation::Scalar) on the same film; the NP–CNT dashpot in one pass with its contact,
+// bit for bit the two passes, in the driver and in a system.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,6 +16,8 @@
 #include "hwy/targets.h"
 #include "mdem/core/cnt.h"
 #include "mdem/force/contact/np_cnt_contact.h"
+#include "mdem/force/damping/np_contact_damping.h"
+#include "mdem/integrate/system.h"
 #include "mdem/neighbor/neighbor_list.h"
 #include "mdem/scene/nanoparticle.h"
 #include "mdem/scene/tube_builder.h"
@@ -200,6 +204,7 @@ Elements film_with_nps(unsigned seed) {
       el.add(cnt_segment(start + s * cnt::kSegmentLength * dir, quat_from_axis(dir), t, s));
   }
   for (int k = 0; k < 150; ++k) el.add(nanoparticle(Vec3(u(rng), u(rng), z(rng))));
+  for (std::size_t i = 0; i < el.size(); ++i) el.v[i] = 2.0 * random_unit(rng);  // dashpots
   return el;
 }
 
@@ -248,6 +253,133 @@ TEST(NpCntSimd, FilmForcesEqualTheScalarLawOpenDomain) { compare_on_film(Domain{
 
 TEST(NpCntSimd, FilmForcesEqualTheScalarLawPeriodic) {
   compare_on_film(Domain(Vec3(-20, -20, -50), Vec3(20, 20, 50), {true, true, false}));
+}
+
+// Everything a force evaluation leaves: forces, torques, damping forces and torques, energy.
+struct Evaluation {
+  std::vector<Vec3> f, t, fd, td;
+  double energy = 0;
+  bool operator==(const Evaluation&) const = default;
+};
+
+template <class Compute>
+Evaluation evaluate_all(std::size_t n, int threads, Compute compute) {
+  ForceSink sink;
+  sink.resize(n, threads, true);
+  compute(sink);
+  Evaluation e{std::vector<Vec3>(n), std::vector<Vec3>(n), std::vector<Vec3>(n),
+               std::vector<Vec3>(n)};
+  e.energy = sink.reduce(e.f, e.t, e.fd, e.td).total_stored();
+  return e;
+}
+
+NeighborList list_of(const ForceModel& m, const Elements& el, const Domain& domain = Domain{}) {
+  NeighborList nl(m.cutoff(), 0.5, domain);
+  nl.set_exclusion(
+      [&m](const Elements& e, std::size_t i, std::size_t j) { return m.excludes(e, i, j); });
+  nl.set_owner(&m);
+  nl.build(el);
+  return nl;
+}
+
+NpDashpotKernel scalar_of(const NpDashpotKernel& k) {
+  return NpDashpotKernel(k.name(), k.owner(), k.kinds(), k.params(), DashpotEvaluation::Scalar);
+}
+
+// The NP–CNT and NP–NP dashpots, batched against scalar, on the film with random velocities.
+TEST(NpDashpotSimd, FilmDampingForcesEqualTheScalarLaw) {
+  const Elements el = film_with_nps(9);
+  for (bool shear : {false, true})
+    for (const NpDashpotKernel& k :
+         {np_cnt_dashpot(0.03, {}, 100.0, shear), np_np_dashpot(0.03, {}, 100.0, shear)}) {
+      const NpContactDamping batched(k);
+      const NpContactDamping scalar(scalar_of(k));
+      const NeighborList nl = list_of(batched, el);
+      ASSERT_GT(nl.pair_count(), 0u) << k.name();
+      for (int threads : {1, 2}) {
+        const auto run = [&](const NpContactDamping& m) {
+          return evaluate_all(el.size(), threads, [&](ForceSink& s) { m.compute(el, &nl, s); });
+        };
+        const Evaluation ref = run(scalar), got = run(batched);
+        double scale = 0, diff = 0, power = 0;
+        Vec3 f_sum = Vec3::Zero();
+        for (std::size_t i = 0; i < el.size(); ++i) {
+          scale = std::max(scale, ref.fd[i].norm());
+          diff = std::max(diff, (got.fd[i] - ref.fd[i]).norm());
+          f_sum += got.fd[i];
+          power += got.fd[i].dot(el.v[i]);
+          ASSERT_EQ(got.td[i], Vec3::Zero());  // a central (or centre-velocity) force: no torque
+          ASSERT_EQ(got.f[i], Vec3::Zero());   // dissipative: the damping slots only
+        }
+        EXPECT_GT(scale, 0.0) << k.name();
+        EXPECT_LT(diff, kRoundOff * scale) << k.name() << ", shear " << shear << ", " << threads;
+        EXPECT_LT(power, 0.0);  // a dashpot only dissipates
+        EXPECT_LT(f_sum.norm(), 1e-12 * scale * el.size());
+        EXPECT_TRUE(run(batched) == got);  // the same bits on a second evaluation
+      }
+    }
+}
+
+// One pass over the NP–CNT contact's list for the contact and its dashpot gives, bit for bit, the
+// two passes one after the other; the NP–NP dashpot (another owner, another cutoff) is not fused.
+TEST(NpDashpotFused, OnePassWithTheNpCntContactEqualsTwoPasses) {
+  const Elements el = film_with_nps(11);
+  const NpCntContact contact;
+  for (bool shear : {false, true}) {
+    const NpContactDamping dashpot(np_cnt_dashpot(0.03, {}, 100.0, shear));
+    ASSERT_EQ(contact.cutoff(), dashpot.cutoff());
+    const NeighborList nl = list_of(contact, el);
+    for (int threads : {1, 2}) {
+      const Evaluation apart = evaluate_all(el.size(), threads, [&](ForceSink& s) {
+        contact.compute(el, &nl, s);
+        dashpot.compute(el, &nl, s);
+      });
+      bool fused = false;
+      const Evaluation one = evaluate_all(el.size(), threads, [&](ForceSink& s) {
+        fused = dashpot.compute_with(contact, el, &nl, s);
+      });
+      ASSERT_TRUE(fused) << threads << " threads";
+      EXPECT_NE(apart.energy, 0.0);
+      EXPECT_TRUE(one == apart) << threads << " threads, shear " << shear;
+    }
+  }
+  const NpContactDamping np_np(np_np_dashpot());
+  const NpContactDamping scalar(scalar_of(np_cnt_dashpot()));
+  const NeighborList nl = list_of(contact, el);
+  ForceSink sink;
+  sink.resize(el.size(), 1, true);
+  EXPECT_FALSE(np_np.compute_with(contact, el, &nl, sink));
+  EXPECT_FALSE(scalar.compute_with(contact, el, &nl, sink));
+}
+
+// A system pairs the NP–CNT dashpot with its contact, whichever was added first; its forces are
+// bit for bit those of the two passes apart.
+TEST(NpDashpotFused, SystemForcesEqualTwoPassesInEitherOrder) {
+  const Elements el = film_with_nps(5);
+  Evaluation got[2];
+  for (int order : {0, 1}) {
+    IntegratorSettings s;
+    s.threads = 2;
+    System sys(el, s);
+    if (order == 0) sys.add(std::make_unique<NpCntContact>());
+    sys.add(std::make_unique<NpContactDamping>(np_cnt_dashpot()));
+    if (order == 1) sys.add(std::make_unique<NpCntContact>());
+    sys.initialize();
+    const Elements& E = sys.elements();
+    const auto* contact = sys.find<NpCntContact>();
+    const auto* dashpot = sys.find<NpContactDamping>();
+    const NeighborList* nl = sys.neighbors(*contact);
+    ASSERT_EQ(nl, sys.neighbors(*dashpot));
+    got[order] = {E.f, E.t, sys.damping_forces(), std::vector<Vec3>(E.size(), Vec3::Zero()),
+                  sys.energy().potential.total_stored()};
+    const Evaluation apart = evaluate_all(E.size(), 2, [&](ForceSink& k) {
+      contact->compute(E, nl, k);
+      dashpot->compute(E, nl, k);
+    });
+    EXPECT_NE(apart.energy, 0.0);
+    EXPECT_TRUE(got[order] == apart) << "order " << order;
+  }
+  EXPECT_TRUE(got[0] == got[1]);
 }
 
 }  // namespace
