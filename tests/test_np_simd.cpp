@@ -101,13 +101,18 @@ struct Forces {
   double energy = 0;
 };
 
-Forces evaluate(const NpCntContact& m, const Elements& el, int threads,
-                const Domain& domain = Domain{}) {
+NeighborList list_of(const ForceModel& m, const Elements& el, const Domain& domain = Domain{}) {
   NeighborList nl(m.cutoff(), 0.5, domain);
   nl.set_exclusion(
       [&m](const Elements& e, std::size_t i, std::size_t j) { return m.excludes(e, i, j); });
   nl.set_owner(&m);
   nl.build(el);
+  return nl;
+}
+
+Forces evaluate(const NpCntContact& m, const Elements& el, int threads,
+                const Domain& domain = Domain{}) {
+  const NeighborList nl = list_of(m, el, domain);
   ForceSink sink;
   sink.resize(el.size(), threads, false);
   m.compute(el, &nl, sink);
@@ -271,15 +276,6 @@ Evaluation evaluate_all(std::size_t n, int threads, Compute compute) {
                std::vector<Vec3>(n)};
   e.energy = sink.reduce(e.f, e.t, e.fd, e.td).total_stored();
   return e;
-}
-
-NeighborList list_of(const ForceModel& m, const Elements& el, const Domain& domain = Domain{}) {
-  NeighborList nl(m.cutoff(), 0.5, domain);
-  nl.set_exclusion(
-      [&m](const Elements& e, std::size_t i, std::size_t j) { return m.excludes(e, i, j); });
-  nl.set_owner(&m);
-  nl.build(el);
-  return nl;
 }
 
 NpDashpotKernel scalar_of(const NpDashpotKernel& k) {
