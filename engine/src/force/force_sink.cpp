@@ -3,6 +3,19 @@
 
 namespace mdem {
 
+namespace {
+// Entry i of the threads' buffers summed in thread order, each entry zeroed as it is read.
+inline Vec3 take_sum(std::vector<std::vector<Vec3>>& buffers, std::size_t i, int nt) {
+  Vec3 sum = buffers[0][i];
+  buffers[0][i].setZero();
+  for (int k = 1; k < nt; ++k) {
+    sum += buffers[k][i];
+    buffers[k][i].setZero();
+  }
+  return sum;
+}
+}  // namespace
+
 void ForceSink::resize(std::size_t n, int n_threads, bool with_damping) {
   force_.assign(n_threads, std::vector<Vec3>(n, Vec3::Zero()));
   torque_.assign(n_threads, std::vector<Vec3>(n, Vec3::Zero()));
@@ -41,12 +54,18 @@ void ForceSink::clear() {
 
 EnergyTally ForceSink::reduce(std::vector<Vec3>& f, std::vector<Vec3>& t, std::vector<Vec3>& fd,
                               std::vector<Vec3>& td) {
-  const long n = threads() ? static_cast<long>(force_[0].size()) : 0;
-  Vec3* const d = has_damping() ? fd.data() : nullptr;
-  Vec3* const e = has_damping() ? td.data() : nullptr;
-#pragma omp parallel for schedule(static) if (n >= kParallelMinItems)
-  for (long i = 0; i < n; ++i)
-    take(static_cast<std::size_t>(i), f[i], t[i], d ? d + i : nullptr, e ? e + i : nullptr);
+  const int nt = threads();
+  const std::size_t n = nt ? force_[0].size() : 0;
+  const bool damp = has_damping();
+#pragma omp parallel for schedule(static) if (static_cast <long>(n) >= kParallelMinItems)
+  for (std::size_t i = 0; i < n; ++i) {
+    f[i] = take_sum(force_, i, nt);
+    t[i] = take_sum(torque_, i, nt);
+    if (damp) {
+      fd[i] = take_sum(damp_force_, i, nt);
+      td[i] = take_sum(damp_torque_, i, nt);
+    }
+  }
   zeroed_ = true;
   return energy_total();
 }
