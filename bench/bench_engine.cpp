@@ -264,6 +264,47 @@ void BM_SparseFilmIntegrator(benchmark::State& state) {
 }
 BENCHMARK(BM_SparseFilmIntegrator)->Apply(one_and_two_threads)->Iterations(20);
 
+// The same pass on a sparse film of `tubes` tubes × 148 segments as generated (models off, same
+// velocities): 8 tubes (1184 elements, ~1 MB of the pass's arrays) run from the core's caches,
+// 396 (the film above) from memory, so the pair says how much of the pass is memory traffic.
+void BM_IntegratorPass(benchmark::State& state) {
+  FilmSpec f = issue13_film(false);
+  f.tubes = static_cast<int>(state.range(1));
+  Scene film = make_film(f);
+  IntegratorSettings set;
+  set.threads = static_cast<int>(state.range(0));
+  set.local_damping = 0.2;
+  set.dt = kIssue13Dt;
+  System sys(std::move(film.el), set);
+  sys.add(std::move(film.bonds));
+  sys.initialize();
+  Elements& el = sys.elements();
+  std::mt19937_64 rng(13);
+  std::normal_distribution<double> g(0.0, 0.02);
+  for (std::size_t i = 0; i < el.size(); ++i) {
+    el.v[i] = Vec3(g(rng), g(rng), g(rng));
+    el.w[i] = Vec3(g(rng), g(rng), g(rng));
+  }
+  for (const auto& m : sys.models()) sys.set_model_active(m.get(), false);
+  sys.restart_clock();
+  sys.run(10);
+  const StepTimers t0 = sys.timers();
+  const double steps = bench::timed_steps(state, sys, 100);
+  const double n = static_cast<double>(el.size());
+  bench::add_phase_counters(state, t0, sys.timers(), steps);
+  state.counters["ns_per_element"] =
+      (sys.timers().integrate_s - t0.integrate_s) / (steps * n) * 1e9;
+}
+BENCHMARK(BM_IntegratorPass)
+    ->ArgNames({"threads", "tubes"})
+    ->Args({1, 8})
+    ->Args({1, 40})
+    ->Args({1, 396})
+    ->Args({2, 8})
+    ->Args({2, 40})
+    ->Args({2, 396})
+    ->Iterations(5);
+
 // One pair model alone on a film: one force evaluation over its own neighbour list (built for
 // it, with its exclusion) per iteration. ns_per_pair is per listed pair (within cutoff + skin);
 // ns_per_interacting_pair per pair within the cutoff (the others are rejected by distance).

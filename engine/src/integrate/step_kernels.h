@@ -281,7 +281,10 @@ MDEM_STEP_KERNEL bool first_element(const StepContext& c, std::size_t i, double&
                                     double& diss) {
   Elements& E = *c.E;
   const double dt = c.dt;
-  const bool iso = half_kicks<C, true>(c, i, work, diss);
+  double wk = 0, ds = 0;  // this element's share, then added to the sums (see second_element)
+  const bool iso = half_kicks<C, true>(c, i, wk, ds);
+  work += wk;
+  diss += ds;
   const Vec3 dx = E.v[i] * dt;
   E.x[i] += dx;
   if (iso) {
@@ -307,7 +310,12 @@ MDEM_STEP_KERNEL bool second_element(const StepContext& c, std::size_t i, double
     local_damping<C, true>(E, i, c.alpha, c.model_damping, c.fd[i], c.td[i], c.net, c.w_net);
   else if (c.alpha > 0)
     local_damping<C, false>(E, i, c.alpha, c.model_damping, c.fd[i], c.td[i], nullptr, 0);
-  const bool iso = half_kicks<C, false>(c, i, work, diss);
+  // The element's terms are summed first and then added to the pass's sums, one addition per
+  // sum and element (the lanes, step_simd.h, add their elements' shares in element order).
+  double wk = 0, ds = 0;
+  const bool iso = half_kicks<C, false>(c, i, wk, ds);
+  work += wk;
+  diss += ds;
   kt += kinetic_translational(E, i);
   kr += kinetic_rotational(E, i, iso);
   // Finite iff 0·v and 0·w are all zero (0·inf and 0·NaN are NaN): one test, not six.

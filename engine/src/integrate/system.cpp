@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "integrate/step_kernels.h"
+#include "integrate/step_simd.h"
 #include "mdem/core/limits.h"
 
 namespace mdem {
@@ -33,8 +34,9 @@ inline void lap(Clock::time_point& mark, double& seconds) {
   mark = now;
 }
 
-// Adds body(i, sums, marks)'s contributions to sums[0..N) over i in [0, n), threaded, in a fixed
-// order: each thread sums its static block into its own slot and the slots are added in thread
+// Adds body(b, e, sums, marks)'s contributions over [b, e) to sums[0..N), for i in [0, n),
+// threaded, in a fixed order: each thread runs its static block (OpenMP's schedule(static): the
+// first n % team threads one element more) into its own slot and the slots are added in thread
 // order. OpenMP's reduction(+) adds the threads' sums in the order they finish, which changes the
 // last bits from run to run, so a run (and a run resumed from a checkpoint) would not repeat
 // exactly. marks[k]: the largest element index the body flagged with k (-1: none), per thread
@@ -51,12 +53,14 @@ std::array<long, 2> ordered_sums(long n, Slots& partial, std::array<double*, N> 
     const Body b = body;
     std::array<double, N> ts{};
     std::array<long, 2> marks{-1, -1};
-#pragma omp for schedule(static) nowait
-    for (long i = 0; i < n; ++i) b(i, ts, marks);
-    auto& slot = partial[omp_get_thread_num()];
+    const long nt = omp_get_num_threads(), t = omp_get_thread_num();
+    const long q = n / nt, r = n % nt;
+    const long begin = t * q + std::min(t, r);
+    b(begin, begin + q + (t < r), ts, marks);
+    auto& slot = partial[t];
     for (std::size_t k = 0; k < N; ++k) slot.sum[k] = ts[k];  // (std::copy would keep ts in memory)
     slot.mark = marks;
-    if (omp_get_thread_num() == 0) used = omp_get_num_threads();
+    if (t == 0) used = static_cast<int>(nt);
   }
   std::array<long, 2> marks{-1, -1};
   for (int t = 0; t < used; ++t) {
@@ -64,6 +68,87 @@ std::array<long, 2> ordered_sums(long n, Slots& partial, std::array<double*, N> 
     for (int k = 0; k < 2; ++k) marks[k] = std::max(marks[k], partial[t].mark[k]);
   }
   return marks;
+}
+
+// A range body of ordered_sums from a body of one element.
+template <class Body>
+auto each(const Body& body) {
+  return [body](long b, long e, auto& s, auto& marks) __attribute__((always_inline)) {
+    for (long i = b; i < e; ++i) body(i, s, marks);
+  };
+}
+
+// A range body that runs whole chunks of free isotropic elements in SIMD lanes (step_simd.h)
+// where `pass` is set, and the others, and what the lanes leave, element by element. kS2, kS1:
+// where pass 2's and pass 1's sums start in the body's sums.
+template <std::size_t kS2, std::size_t kS1, class Body>
+auto chunked(const step_simd::Pass* pass, long lanes, const Body& body) {
+  return [ pass, lanes, body ](long b, long e, auto& s, auto& marks)
+      __attribute__((always_inline)) {
+    for (long i = b; i < e;) {
+      long stop = e;
+      if (pass) {
+        i = step_simd::run(*pass, i, e, s.data() + kS2, s.data() + kS1, &marks[0]);
+        stop = std::min(e, i + lanes);
+      }
+      for (; i < stop; ++i) body(i, s, marks);
+    }
+  };
+}
+
+// The arrays and settings of a pass in lanes (step_simd.h) from a pass's context; the sink's
+// buffer pointers are kept in buffers (4 per thread).
+step_simd::Pass lanes_pass(const step::StepContext& c, bool second, bool first,
+                           std::vector<double*>& buffers) {
+  static_assert(sizeof(Vec3) == 3 * sizeof(double) && sizeof(Quat) == 4 * sizeof(double));
+  static_assert(sizeof(std::array<DofMode, 6>) == 6);
+  Elements& E = *c.E;
+  auto d = [](auto& v) { return reinterpret_cast<double*>(v.data()); };
+  auto cd = [](const auto& v) { return reinterpret_cast<const double*>(v.data()); };
+  step_simd::Pass p;
+  p.x = d(E.x);
+  p.q = d(E.q);
+  p.v = d(E.v);
+  p.w = d(E.w);
+  p.f = d(E.f);
+  p.t = d(E.t);
+  p.fd = reinterpret_cast<double*>(c.fd);
+  p.td = reinterpret_cast<double*>(c.td);
+  p.f_ext = cd(E.f_ext);
+  p.t_ext = cd(E.t_ext);
+  p.mass = E.mass.data();
+  p.inv_mass = E.inv_mass.data();
+  p.inertia = cd(E.inertia);
+  p.radius = E.radius.data();
+  p.dof = reinterpret_cast<const unsigned char*>(E.dof.data());
+  if (second && c.sink) {
+    const int nt = c.sink->threads();
+    buffers.resize(4 * static_cast<std::size_t>(nt));  // no allocation after the first step
+    for (int k = 0; k < nt; ++k) {
+      buffers[k] = reinterpret_cast<double*>(c.sink->force(k));
+      buffers[nt + k] = reinterpret_cast<double*>(c.sink->torque(k));
+      if (c.sink->has_damping()) {
+        buffers[2 * nt + k] = reinterpret_cast<double*>(c.sink->damping_force(k));
+        buffers[3 * nt + k] = reinterpret_cast<double*>(c.sink->damping_torque(k));
+      }
+    }
+    p.sink_f = buffers.data();
+    p.sink_t = buffers.data() + nt;
+    if (c.sink->has_damping()) {
+      p.sink_fd = buffers.data() + 2 * nt;
+      p.sink_td = buffers.data() + 3 * nt;
+    }
+    p.sink_threads = nt;
+  }
+  p.dt = c.dt;
+  p.h = c.h;
+  if (second) {
+    p.alpha = c.alpha;
+    p.model_damping = c.model_damping;
+  }
+  p.second = second;
+  p.first = first;
+  return p;
 }
 
 // Runs f.template operator()<C>() with element i's class: FreeIsotropic when it is one and the
@@ -77,6 +162,8 @@ inline void by_class(bool fast, const Elements& E, long i, F&& f) {
 }
 
 }  // namespace
+
+const char* step_simd_target() { return step_simd::target_name(); }
 
 System::System(Elements el, IntegratorSettings s) : el_(std::move(el)), settings_(s) {}
 System::~System() = default;
@@ -343,10 +430,10 @@ void System::add_slow_forces(bool in_step) {
 void System::update_kinetic() {
   double kt = 0, kr = 0;
   const long n = static_cast<long>(el_.size());
-  ordered_sums<2>(n, partial_sums_, {&kt, &kr}, [this](long i, auto& k, auto&) {
-    k[0] += step::kinetic_translational(el_, i);
-    k[1] += step::kinetic_rotational(el_, i, el_.is_isotropic(i));
-  });
+  ordered_sums<2>(n, partial_sums_, {&kt, &kr}, each([this](long i, auto& k, auto&) {
+                    k[0] += step::kinetic_translational(el_, i);
+                    k[1] += step::kinetic_rotational(el_, i, el_.is_isotropic(i));
+                  }));
   ledger_.kinetic_translational = kt;
   ledger_.kinetic_rotational = kr;
 }
@@ -421,6 +508,7 @@ void System::run(long nsteps) {
   // velocity became non-finite in 2. is marked 1 (ordered_sums' marks). The context is taken
   // afresh for each pass: a reordering of the elements (memory order) reallocates fd_, td_.
   const bool fast = settings_.free_isotropic_fast_path;
+  const long lanes = static_cast<long>(step_simd::lanes());
   auto context = [&] { return step::StepContext{&E, fd_.data(), td_.data(), dt, h}; };
   long runaway = -1;
   // Each element's arithmetic is that of velocity Verlet, in one pass over the elements per step
@@ -442,7 +530,9 @@ void System::run(long nsteps) {
               if (!step::first_element<C>(c, i, s[0], s[1])) mark[0] = i;
             });
       };
-      runaway = ordered_sums<2>(n, partial_sums_, {&work, &diss}, first)[0];
+      const step_simd::Pass p1 = lanes_pass(c, false, true, sink_buffers_);
+      runaway = ordered_sums<2>(n, partial_sums_, {&work, &diss},
+                                chunked<0, 0>(fast ? &p1 : nullptr, lanes, first))[0];
     }
     if (runaway >= 0) {
       const std::size_t i = static_cast<std::size_t>(runaway);
@@ -496,13 +586,18 @@ void System::run(long nsteps) {
         respa_.closes_outer_step(steps_) && steps_ % settings_.guard_every < respa_.k();
     const bool fuse = !guard && step + 1 < nsteps;
     double kt = 0, kr = 0, work_next = 0, diss_next = 0;
+    // Lanes take pass 2 unless multiple time stepping's held forces enter local damping.
+    const bool lanes2 = fast && !(c2.alpha > 0 && c2.net);
+    const step_simd::Pass p2 = lanes_pass(c2, true, fuse, sink_buffers_);
     if (fuse) {
-      const auto marks = ordered_sums<6>(
-          n, partial_sums_, {&work, &diss, &kt, &kr, &work_next, &diss_next}, second_first);
+      const auto marks =
+          ordered_sums<6>(n, partial_sums_, {&work, &diss, &kt, &kr, &work_next, &diss_next},
+                          chunked<0, 4>(lanes2 ? &p2 : nullptr, lanes, second_first));
       runaway = marks[0];
       bad = marks[1];
     } else {
-      bad = ordered_sums<4>(n, partial_sums_, {&work, &diss, &kt, &kr}, second)[1];
+      bad = ordered_sums<4>(n, partial_sums_, {&work, &diss, &kt, &kr},
+                            chunked<0, 0>(lanes2 ? &p2 : nullptr, lanes, second))[1];
     }
     if (c2.sink) sink_.taken();
     if (bad >= 0) check_finite_forces();  // names the element and the cause

@@ -90,8 +90,9 @@ struct IntegratorSettings {
   int respa_k = 1;
   // Off: every element takes the integrator's general per-DOF kernels; on, elements with all six
   // DOFs free and isotropic inertia take the same arithmetic compiled without the per-DOF
-  // branches (integrate/step_kernels.h). Results are bit for bit the same either way; tests
-  // compare the two. No spec field sets it.
+  // branches (integrate/step_kernels.h), in SIMD lanes of consecutive elements where a whole
+  // chunk is of that class (integrate/step_simd.h, step_simd_target()). Results are bit for bit
+  // the same either way; tests compare the two. No spec field sets it.
   bool free_isotropic_fast_path = true;
 };
 
@@ -286,6 +287,7 @@ class System {
     std::array<long, 2> mark{-1, -1};
   };
   std::vector<ThreadSlot> partial_sums_;
+  std::vector<double*> sink_buffers_;  // the sink's per-thread buffers for the passes in lanes
   EnergyLedger ledger_;
   StepTimers timers_;
   double energy_scale_ = 0;  // energy in play, for relative errors
@@ -300,5 +302,9 @@ class System {
   bool local_damping_was_on_ = false;  // fd_/td_ may hold local damping to clear
   bool sums_deferred_ = false;         // the last compute_forces left the sums in sink_
 };
+
+// The instruction set the integrator's lanes run on (IntegratorSettings::free_isotropic_fast_path),
+// e.g. "AVX3", "AVX2", "EMU128".
+const char* step_simd_target();
 
 }  // namespace mdem

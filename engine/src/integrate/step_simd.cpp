@@ -1,0 +1,324 @@
+// The integrator's FreeIsotropic kernels (step_kernels.h) over lanes of consecutive elements
+// (step_simd.h). Every expression below is the scalar kernel's, operation for operation, named
+// after the function it mirrors; where Eigen fixes an order (squared norms, the quaternion
+// product of its SSE2 path), the lanes take that order.
+#include "integrate/step_simd.h"
+
+#include <cstdint>
+#include <cstring>
+
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "integrate/step_simd.cpp"
+#include "hwy/foreach_target.h"  // IWYU pragma: keep
+#include "hwy/highway.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace mdem::step_simd {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+using D = hn::ScalableTag<double>;
+using V = hn::Vec<D>;
+constexpr std::size_t kMax = HWY_MAX_BYTES / sizeof(double);
+
+struct V3 {
+  V x, y, z;
+};
+
+HWY_INLINE V3 load3(const double* p, long i) {
+  const D d;
+  V3 r;
+  hn::LoadInterleaved3(d, p + 3 * i, r.x, r.y, r.z);
+  return r;
+}
+HWY_INLINE void store3(const V3& a, double* p, long i) {
+  hn::StoreInterleaved3(a.x, a.y, a.z, D(), p + 3 * i);
+}
+// The three vectors' worth of doubles of a chunk's Vec3 array set to zero (ForceSink::take).
+HWY_INLINE void zero3(double* p, long i) {
+  const D d;
+  const std::size_t n = hn::Lanes(d);
+  const V z = hn::Zero(d);
+  hn::StoreU(z, d, p + 3 * i);
+  hn::StoreU(z, d, p + 3 * i + n);
+  hn::StoreU(z, d, p + 3 * i + 2 * n);
+}
+// Eigen's Vector3d::squaredNorm(): (x² + y²) + z².
+HWY_INLINE V sq3(const V3& a) { return (a.x * a.x + a.y * a.y) + a.z * a.z; }
+
+// sign_of(v): 1, −1 or 0 (also for −0 and NaN).
+HWY_INLINE V sign_of(V v) {
+  const D d;
+  const V zero = hn::Zero(d);
+  return hn::IfThenElse(hn::Gt(v, zero), hn::Set(d, 1.0),
+                        hn::IfThenElseZero(hn::Lt(v, zero), hn::Set(d, -1.0)));
+}
+
+// One component of local_damping: fd −= α|F| sign(v), F = f + f_ext + fd.
+HWY_INLINE V damp(V f, V fe, V fd, V v, V a) {
+  const V F = (f + fe) + fd;
+  return fd - (a * hn::Abs(F)) * sign_of(v);
+}
+
+// The terms each pass adds to its books, per DOF in the scalar kernels' order (translation x, y,
+// z, then rotation x, y, z), one vector per term.
+struct Terms {
+  V work[6], diss[6];
+};
+
+// second_half_kick, Free: work += F_ext v h; v += h (F + F_ext + F_damp)/m; diss −= F_damp v h.
+HWY_INLINE void kick2(V& v, V F, V Fe, V Fd, V inv_m, V h, V& work, V& diss) {
+  work = (Fe * v) * h;
+  v = v + (h * ((F + Fe) + Fd)) * inv_m;
+  diss = (Fd * v) * h;
+}
+// first_half_kick, Free: diss −= F_damp v0 h; v = v0 + h (F + F_ext + F_damp)/m; work += F_ext v h.
+HWY_INLINE void kick1(V& v, V F, V Fe, V Fd, V inv_m, V h, V& work, V& diss) {
+  diss = (Fd * v) * h;
+  v = v + (h * ((F + Fe) + Fd)) * inv_m;
+  work = (Fe * v) * h;
+}
+
+template <bool kFirst>
+HWY_INLINE void kicks(V3& v, V3& w, const V3& f, const V3& t, const V3& fe, const V3& te,
+                      const V3& fd, const V3& td, V inv_m, V inv_I, V h, Terms& s) {
+  const auto k = [](V& v, V F, V Fe, V Fd, V inv_m, V h, V& work, V& diss) HWY_ATTR {
+    if constexpr (kFirst)
+      kick1(v, F, Fe, Fd, inv_m, h, work, diss);
+    else
+      kick2(v, F, Fe, Fd, inv_m, h, work, diss);
+  };
+  k(v.x, f.x, fe.x, fd.x, inv_m, h, s.work[0], s.diss[0]);
+  k(v.y, f.y, fe.y, fd.y, inv_m, h, s.work[1], s.diss[1]);
+  k(v.z, f.z, fe.z, fd.z, inv_m, h, s.work[2], s.diss[2]);
+  k(w.x, t.x, te.x, td.x, inv_I, h, s.work[3], s.diss[3]);
+  k(w.y, t.y, te.y, td.y, inv_I, h, s.work[4], s.diss[4]);
+  k(w.z, t.z, te.z, td.z, inv_I, h, s.work[5], s.diss[5]);
+}
+
+// The lanes' shares of a pass's work and dissipation: each lane's terms summed in the scalar
+// kernels' order from zero (their w, d), the dissipation terms subtracted.
+HWY_INLINE void shares(const Terms& s, V& work, V& diss) {
+  const V zero = hn::Zero(D());
+  work = zero;
+  diss = zero;
+  for (int k = 0; k < 6; ++k) {
+    work = work + s.work[k];
+    diss = diss - s.diss[k];
+  }
+}
+// Adds the lanes of each vector to its running sum, lane by lane (element order): the scalar
+// loop's sequence of additions.
+template <int K>
+HWY_INLINE void book(const V (&v)[K], double* const (&sum)[K]) {
+  const D d;
+  const std::size_t n = hn::Lanes(d);
+  HWY_ALIGN double b[K * kMax];
+  for (int k = 0; k < K; ++k) hn::Store(v[k], d, b + k * n);
+  double acc[K];
+  for (int k = 0; k < K; ++k) acc[k] = *sum[k];
+  for (std::size_t l = 0; l < n; ++l)
+    for (int k = 0; k < K; ++k) acc[k] += b[k * n + l];
+  for (int k = 0; k < K; ++k) *sum[k] = acc[k];
+}
+
+// Whether every element of the chunk at i has six free DOFs and isotropic inertia
+// (step::free_isotropic); inertia is set to the chunk's.
+HWY_INLINE bool free_isotropic(const Pass& p, long i, V3& inertia) {
+  const D d;
+  const std::size_t n = hn::Lanes(d);
+  unsigned char any = 0;
+  for (std::size_t b = 0; b < 6 * n; ++b) any |= p.dof[6 * i + b];
+  if (any != 0) return false;
+  inertia = load3(p.inertia, i);
+  const V tol = hn::Set(d, 1e-12) * inertia.x;
+  const auto iso = hn::And(hn::Le(hn::Abs(inertia.x - inertia.y), tol),
+                           hn::Le(hn::Abs(inertia.x - inertia.z), tol));
+  return hn::AllTrue(d, iso);
+}
+
+// The chunk at i; false (nothing written) when a lane leaves the common branches.
+template <bool kSecond, bool kFirst>
+HWY_INLINE bool chunk(const Pass& p, long i, double* s2, double* s1, long* runaway) {
+  const D d;
+  V3 I3;
+  if (!free_isotropic(p, i, I3)) return false;
+  const V h = hn::Set(d, p.h);
+  const V zero = hn::Zero(d);
+  const V m = hn::LoadU(d, p.mass + i), inv_m = hn::LoadU(d, p.inv_mass + i);
+  const V I = I3.x, inv_I = hn::Set(d, 1.0) / I;
+  V3 v = load3(p.v, i), w = load3(p.w, i);
+  const V3 fe = load3(p.f_ext, i), te = load3(p.t_ext, i);
+  // Loads of what the sink may replace; its buffers are zeroed only once the chunk is known good.
+  const bool sink = kSecond && p.sink_threads > 0;
+  const bool sink_damp = sink && p.sink_fd != nullptr;
+  V3 f, t, fd, td;
+  if (sink) {
+    f = load3(p.sink_f[0], i);
+    t = load3(p.sink_t[0], i);
+    for (int k = 1; k < p.sink_threads; ++k) {
+      const V3 a = load3(p.sink_f[k], i), b = load3(p.sink_t[k], i);
+      f = {f.x + a.x, f.y + a.y, f.z + a.z};
+      t = {t.x + b.x, t.y + b.y, t.z + b.z};
+    }
+  } else {
+    f = load3(p.f, i);
+    t = load3(p.t, i);
+  }
+  if (sink_damp) {
+    fd = load3(p.sink_fd[0], i);
+    td = load3(p.sink_td[0], i);
+    for (int k = 1; k < p.sink_threads; ++k) {
+      const V3 a = load3(p.sink_fd[k], i), b = load3(p.sink_td[k], i);
+      fd = {fd.x + a.x, fd.y + a.y, fd.z + a.z};
+      td = {td.x + b.x, td.y + b.y, td.z + b.z};
+    }
+  } else {
+    fd = load3(p.fd, i);
+    td = load3(p.td, i);
+  }
+  const bool damped = kSecond && p.alpha > 0;
+  Terms t2, t1;
+  V kt = zero, kr = zero;
+  if constexpr (kSecond) {
+    if (damped) {  // local_damping
+      if (!p.model_damping) fd = td = {zero, zero, zero};
+      const V a = hn::Set(d, p.alpha);
+      fd = {damp(f.x, fe.x, fd.x, v.x, a), damp(f.y, fe.y, fd.y, v.y, a),
+            damp(f.z, fe.z, fd.z, v.z, a)};
+      td = {damp(t.x, te.x, td.x, w.x, a), damp(t.y, te.y, td.y, w.y, a),
+            damp(t.z, te.z, td.z, w.z, a)};
+    }
+    kicks<false>(v, w, f, t, fe, te, fd, td, inv_m, inv_I, h, t2);
+    const V half = hn::Set(d, 0.5);
+    kt = (half * m) * sq3(v);
+    kr = (half * I) * sq3(w);
+    // Finite iff 0·v and 0·w are all zero.
+    const V z = ((((zero * v.x + zero * v.y) + zero * v.z) + zero * w.x) + zero * w.y) + zero * w.z;
+    if (!hn::AllTrue(d, hn::Eq(z, zero))) return false;
+  }
+  V3 x{}, dx{};
+  V qx = zero, qy = zero, qz = zero, qw = zero;
+  if constexpr (kFirst) {
+    kicks<true>(v, w, f, t, fe, te, fd, td, inv_m, inv_I, h, t1);
+    const V dt = hn::Set(d, p.dt);
+    dx = {v.x * dt, v.y * dt, v.z * dt};
+    x = load3(p.x, i);
+    x = {x.x + dx.x, x.y + dx.y, x.z + dx.z};
+    // drift_orientation(ω dt, q), series branch.
+    const V3 phi{w.x * dt, w.y * dt, w.z * dt};
+    const V a2 = sq3(phi);
+    if (!hn::AllTrue(d, hn::Lt(a2, hn::Set(d, 0.01)))) return false;
+    const V xs = hn::Set(d, 0.25) * a2;
+    auto c_ = [&](double k) { return hn::Set(d, k); };
+    const V c =
+        c_(1) + xs * (c_(-1.0 / 2) +
+                      xs * (c_(1.0 / 24) + xs * (c_(-1.0 / 720) + xs * (c_(1.0 / 40320) +
+                                                                        xs * c_(-1.0 / 3628800)))));
+    const V s =
+        c_(0.5) *
+        (c_(1) + xs * (c_(-1.0 / 6) +
+                       xs * (c_(1.0 / 120) + xs * (c_(-1.0 / 5040) + xs * c_(1.0 / 362880)))));
+    const V rw = c, rx = s * phi.x, ry = s * phi.y, rz = s * phi.z;
+    V bx, by, bz, bw;
+    hn::LoadInterleaved4(d, p.q + 4 * i, bx, by, bz, bw);
+    // Eigen's quaternion product r * q (its SSE2 path, Geometry_SIMD.h).
+    qx = (rw * bx + ry * bz) - (rz * by - rx * bw);
+    qy = (rw * by + ry * bw) + (rz * bx - rx * bz);
+    qz = (rw * bz - ry * bx) + (rz * bw + rx * by);
+    qw = (rw * bw - ry * by) - (rz * bz + rx * bx);
+    // Eigen's Vector4d::squaredNorm(): (x² + z²) + (y² + w²).
+    const V e = ((qx * qx + qz * qz) + (qy * qy + qw * qw)) - c_(1);
+    if (!hn::AllTrue(d, hn::Lt(hn::Abs(e), c_(1e-6)))) return false;
+    const V g = c_(1) + e * (c_(-0.5) + c_(0.375) * e);
+    qx = qx * g;
+    qy = qy * g;
+    qz = qz * g;
+    qw = qw * g;
+  }
+  // The chunk is good: write it.
+  if (sink) {
+    for (int k = 0; k < p.sink_threads; ++k) {
+      zero3(p.sink_f[k], i);
+      zero3(p.sink_t[k], i);
+      if (sink_damp) {
+        zero3(p.sink_fd[k], i);
+        zero3(p.sink_td[k], i);
+      }
+    }
+    store3(f, p.f, i);
+    store3(t, p.t, i);
+  }
+  if (sink_damp || damped) {
+    store3(fd, p.fd, i);
+    store3(td, p.td, i);
+  }
+  store3(v, p.v, i);
+  store3(w, p.w, i);
+  if constexpr (kSecond && kFirst) {
+    V w2, d2, w1, d1;
+    shares(t2, w2, d2);
+    shares(t1, w1, d1);
+    book<6>({w2, d2, kt, kr, w1, d1}, {s2, s2 + 1, s2 + 2, s2 + 3, s1, s1 + 1});
+  } else if constexpr (kSecond) {
+    V w2, d2;
+    shares(t2, w2, d2);
+    book<4>({w2, d2, kt, kr}, {s2, s2 + 1, s2 + 2, s2 + 3});
+  } else {
+    V w1, d1;
+    shares(t1, w1, d1);
+    book<2>({w1, d1}, {s1, s1 + 1});
+  }
+  if constexpr (kFirst) {
+    store3(x, p.x, i);
+    hn::StoreInterleaved4(qx, qy, qz, qw, d, p.q + 4 * i);
+    // The runaway check of first_element.
+    const V r = hn::LoadU(d, p.radius + i);
+    const V dt = hn::Set(d, p.dt);
+    const auto ok = hn::And(hn::Le(sq3(dx), r * r), hn::Le(sq3(w) * (dt * dt), hn::Set(d, 1.0)));
+    if (!hn::AllTrue(d, ok)) {
+      HWY_ALIGN double okb[kMax];
+      hn::Store(hn::IfThenElseZero(ok, hn::Set(d, 1.0)), d, okb);
+      for (std::size_t l = 0; l < hn::Lanes(d); ++l)
+        if (okb[l] == 0) *runaway = i + static_cast<long>(l);
+    }
+  }
+  return true;
+}
+
+template <bool kSecond, bool kFirst>
+long RunChunks(const Pass& p, long i, long e, double* s2, double* s1, long* runaway) {
+  const long n = static_cast<long>(hn::Lanes(D()));
+  while (i + n <= e && chunk<kSecond, kFirst>(p, i, s2, s1, runaway)) i += n;
+  return i;
+}
+
+long Run(const Pass& p, long i, long e, double* s2, double* s1, long* runaway) {
+  if (p.second && p.first) return RunChunks<true, true>(p, i, e, s2, s1, runaway);
+  if (p.second) return RunChunks<true, false>(p, i, e, s2, s1, runaway);
+  if (p.first) return RunChunks<false, true>(p, i, e, s2, s1, runaway);
+  return i;
+}
+
+std::size_t Lanes() { return hn::Lanes(D()); }
+const char* TargetName() { return hwy::TargetName(HWY_TARGET); }
+
+}  // namespace HWY_NAMESPACE
+}  // namespace mdem::step_simd
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace mdem::step_simd {
+
+HWY_EXPORT(Run);
+HWY_EXPORT(Lanes);
+HWY_EXPORT(TargetName);
+
+long run(const Pass& p, long i, long e, double* second, double* first, long* runaway) {
+  return HWY_DYNAMIC_DISPATCH(Run)(p, i, e, second, first, runaway);
+}
+std::size_t lanes() { return HWY_DYNAMIC_DISPATCH(Lanes)(); }
+const char* target_name() { return HWY_DYNAMIC_DISPATCH(TargetName)(); }
+
+}  // namespace mdem::step_simd
+#endif

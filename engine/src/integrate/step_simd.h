@@ -1,0 +1,50 @@
+#pragma once
+// The integrator's per-element arithmetic (step_kernels.h) for the FreeIsotropic class over
+// lanes of consecutive elements, on the widest instruction set of the running CPU (Google
+// Highway's dynamic dispatch, as the pair kernels). Each lane does the scalar kernel's operations
+// in the scalar kernel's order (no fused multiply-adds: the file is compiled with
+// -ffp-contract=off), and each element's share of the energy books is added to them in element
+// order, so the results are the scalar path's bit for bit (test_step_fast_path).
+//
+// A chunk of lanes is run only when every element in it is free and isotropic and takes the
+// common branches (orientation drift below 0.1 rad, renormalisation by the series, finite
+// velocities); otherwise nothing of the chunk is written and the caller runs it with the scalar
+// kernels, which also name what went wrong.
+#include <cstddef>
+
+namespace mdem::step_simd {
+
+// One pass over the elements: the arrays of Elements and of the system's damping buffers as
+// doubles (a Vec3 is 3, a quaternion x, y, z, w), and the pass's settings.
+struct Pass {
+  double *x, *q, *v, *w, *f, *t, *fd, *td;
+  const double *f_ext, *t_ext, *mass, *inv_mass, *inertia, *radius;
+  const unsigned char* dof;  // 6 DofMode bytes per element (Free = 0)
+  // The force evaluation's per-thread buffers when its sums are still to be taken
+  // (ForceSink::take): sink[k] for thread k, force, torque, and the damping force and torque
+  // (null when the sink has no damping buffers); sink_threads = 0 when f, t, fd, td hold them.
+  double* const* sink_f = nullptr;
+  double* const* sink_t = nullptr;
+  double* const* sink_fd = nullptr;
+  double* const* sink_td = nullptr;
+  int sink_threads = 0;
+  double dt = 0, h = 0;
+  double alpha = 0;            // local damping (second pass only; 0 = off)
+  bool model_damping = false;  // the model dampers wrote fd, td (else local damping zeroes them)
+  bool second = false;         // 2.: take, local damping, second half kick, kinetic energy
+  bool first = false;          // 1.: first half kick and drift (after 2. when both)
+};
+
+// Runs elements from i on, a chunk of lanes() at a time, while a whole chunk fits below e and
+// can be run (see above); returns where it stopped (e, or the start of a chunk for the scalar
+// kernels). second: the running sums work, diss, kt, kr of pass 2; first: work, diss of pass 1;
+// each gets its elements' shares in element order, as from the scalar kernels. *runaway: set to the
+// largest index that moved more than its radius or turned more than a radian in the drift (as the
+// scalar kernel marks it; the element is still integrated).
+long run(const Pass& p, long i, long e, double* second, double* first, long* runaway);
+
+// The lanes of a chunk (8 with AVX-512) and the instruction set, e.g. "AVX3", "EMU128".
+std::size_t lanes();
+const char* target_name();
+
+}  // namespace mdem::step_simd
