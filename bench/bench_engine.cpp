@@ -238,35 +238,13 @@ void BM_SparseFilmSteps(benchmark::State& state) { issue13_steps(state, false); 
 BENCHMARK(BM_DenseFilmSteps)->Apply(one_and_two_threads)->Iterations(4);
 BENCHMARK(BM_SparseFilmSteps)->Apply(one_and_two_threads)->Iterations(6);
 
-// The integrator's pass alone (kicks, drift, local damping 0.2, kinetic energy, guard) on the
-// relaxed sparse film: both force models switched off, random velocities and spins (0.02 nm/ps and
-// rad/ps per component, the order of 300 K), so every element takes the free isotropic fast path
-// with the signs of a thermal film. integrate_ms and ns_per_element are the pass's (the timers'
-// integrate phase); the force phase is then only the sink's reduction.
-void BM_SparseFilmIntegrator(benchmark::State& state) {
-  System sys = issue13_system(relaxed_issue13_film(false), false, static_cast<int>(state.range(0)));
-  Elements& el = sys.elements();
-  std::mt19937_64 rng(13);
-  std::normal_distribution<double> g(0.0, 0.02);
-  for (std::size_t i = 0; i < el.size(); ++i) {
-    el.v[i] = Vec3(g(rng), g(rng), g(rng));
-    el.w[i] = Vec3(g(rng), g(rng), g(rng));
-  }
-  for (const auto& m : sys.models()) sys.set_model_active(m.get(), false);
-  sys.restart_clock();
-  sys.run(10);  // warm-up
-  const StepTimers t0 = sys.timers();
-  const double steps = bench::timed_steps(state, sys, 10);
-  const double n = static_cast<double>(el.size());
-  bench::add_phase_counters(state, t0, sys.timers(), steps);
-  state.counters["ns_per_element"] =
-      (sys.timers().integrate_s - t0.integrate_s) / (steps * n) * 1e9;
-}
-BENCHMARK(BM_SparseFilmIntegrator)->Apply(one_and_two_threads)->Iterations(20);
-
-// The same pass on a sparse film of `tubes` tubes × 148 segments as generated (models off, same
-// velocities): 8 tubes (1184 elements, ~1 MB of the pass's arrays) run from the core's caches,
-// 396 (the film above) from memory, so the pair says how much of the pass is memory traffic.
+// The integrator's pass alone (kicks, drift, local damping 0.2, kinetic energy, guard) on issue
+// 13's sparse film as generated, cut to its first `tubes` tubes × 148 segments: both force models
+// switched off, random velocities and spins (0.02 nm/ps and rad/ps per component, the order of
+// 300 K), so every element takes the free isotropic fast path with the signs of a thermal film.
+// integrate_ms and ns_per_element are the pass's (the timers' integrate phase). 8 tubes (1184
+// elements, ~1 MB of the pass's arrays) run from the core's caches, 396 (the whole film) from
+// memory, so the pair says how much of the pass is memory traffic.
 void BM_IntegratorPass(benchmark::State& state) {
   FilmSpec f = issue13_film(false);
   f.tubes = static_cast<int>(state.range(1));

@@ -43,6 +43,15 @@ HWY_INLINE void zero3(double* p, long i) {
   hn::StoreU(z, d, p + 3 * i + n);
   hn::StoreU(z, d, p + 3 * i + 2 * n);
 }
+// ForceSink::take's sum of the threads' buffers b[0 .. nt), in thread order.
+HWY_INLINE V3 thread_sum(double* const* b, int nt, long i) {
+  V3 s = load3(b[0], i);
+  for (int k = 1; k < nt; ++k) {
+    const V3 o = load3(b[k], i);
+    s = {s.x + o.x, s.y + o.y, s.z + o.z};
+  }
+  return s;
+}
 // Eigen's Vector3d::squaredNorm(): (x² + y²) + z².
 HWY_INLINE V sq3(const V3& a) { return (a.x * a.x + a.y * a.y) + a.z * a.z; }
 
@@ -152,31 +161,11 @@ HWY_INLINE bool chunk(const Pass& p, long i, double* s2, double* s1, long* runaw
   // Loads of what the sink may replace; its buffers are zeroed only once the chunk is known good.
   const bool sink = kSecond && p.sink_threads > 0;
   const bool sink_damp = sink && p.sink_fd != nullptr;
-  V3 f, t, fd, td;
-  if (sink) {
-    f = load3(p.sink_f[0], i);
-    t = load3(p.sink_t[0], i);
-    for (int k = 1; k < p.sink_threads; ++k) {
-      const V3 a = load3(p.sink_f[k], i), b = load3(p.sink_t[k], i);
-      f = {f.x + a.x, f.y + a.y, f.z + a.z};
-      t = {t.x + b.x, t.y + b.y, t.z + b.z};
-    }
-  } else {
-    f = load3(p.f, i);
-    t = load3(p.t, i);
-  }
-  if (sink_damp) {
-    fd = load3(p.sink_fd[0], i);
-    td = load3(p.sink_td[0], i);
-    for (int k = 1; k < p.sink_threads; ++k) {
-      const V3 a = load3(p.sink_fd[k], i), b = load3(p.sink_td[k], i);
-      fd = {fd.x + a.x, fd.y + a.y, fd.z + a.z};
-      td = {td.x + b.x, td.y + b.y, td.z + b.z};
-    }
-  } else {
-    fd = load3(p.fd, i);
-    td = load3(p.td, i);
-  }
+  const int nt = p.sink_threads;
+  const V3 f = sink ? thread_sum(p.sink_f, nt, i) : load3(p.f, i);
+  const V3 t = sink ? thread_sum(p.sink_t, nt, i) : load3(p.t, i);
+  V3 fd = sink_damp ? thread_sum(p.sink_fd, nt, i) : load3(p.fd, i);
+  V3 td = sink_damp ? thread_sum(p.sink_td, nt, i) : load3(p.td, i);
   const bool damped = kSecond && p.alpha > 0;
   Terms t2, t1;
   V kt = zero, kr = zero;
