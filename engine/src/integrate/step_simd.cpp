@@ -75,34 +75,27 @@ struct Terms {
   V work[6], diss[6];
 };
 
-// second_half_kick, Free: work += F_ext v h; v += h (F + F_ext + F_damp)/m; diss −= F_damp v h.
-HWY_INLINE void kick2(V& v, V F, V Fe, V Fd, V inv_m, V h, V& work, V& diss) {
-  work = (Fe * v) * h;
-  v = v + (h * ((F + Fe) + Fd)) * inv_m;
-  diss = (Fd * v) * h;
-}
-// first_half_kick, Free: diss −= F_damp v0 h; v = v0 + h (F + F_ext + F_damp)/m; work += F_ext v h.
-HWY_INLINE void kick1(V& v, V F, V Fe, V Fd, V inv_m, V h, V& work, V& diss) {
-  diss = (Fd * v) * h;
-  v = v + (h * ((F + Fe) + Fd)) * inv_m;
-  work = (Fe * v) * h;
+// One DOF's half kick, Free, with the terms of its books: first_half_kick books the damping at
+// v_n and the load at the kicked velocity, second_half_kick the load at the velocity before the
+// kick and the damping after it (work += F_ext v h, diss −= F_damp v h; v += h (F + F_ext +
+// F_damp)/m).
+template <bool kFirst>
+HWY_INLINE void kick(V& v, V F, V Fe, V Fd, V inv_m, V h, V& work, V& diss) {
+  const V v0 = v;
+  v = v0 + (h * ((F + Fe) + Fd)) * inv_m;
+  work = (Fe * (kFirst ? v : v0)) * h;
+  diss = (Fd * (kFirst ? v0 : v)) * h;
 }
 
 template <bool kFirst>
 HWY_INLINE void kicks(V3& v, V3& w, const V3& f, const V3& t, const V3& fe, const V3& te,
                       const V3& fd, const V3& td, V inv_m, V inv_I, V h, Terms& s) {
-  const auto k = [](V& v, V F, V Fe, V Fd, V inv_m, V h, V& work, V& diss) HWY_ATTR {
-    if constexpr (kFirst)
-      kick1(v, F, Fe, Fd, inv_m, h, work, diss);
-    else
-      kick2(v, F, Fe, Fd, inv_m, h, work, diss);
-  };
-  k(v.x, f.x, fe.x, fd.x, inv_m, h, s.work[0], s.diss[0]);
-  k(v.y, f.y, fe.y, fd.y, inv_m, h, s.work[1], s.diss[1]);
-  k(v.z, f.z, fe.z, fd.z, inv_m, h, s.work[2], s.diss[2]);
-  k(w.x, t.x, te.x, td.x, inv_I, h, s.work[3], s.diss[3]);
-  k(w.y, t.y, te.y, td.y, inv_I, h, s.work[4], s.diss[4]);
-  k(w.z, t.z, te.z, td.z, inv_I, h, s.work[5], s.diss[5]);
+  kick<kFirst>(v.x, f.x, fe.x, fd.x, inv_m, h, s.work[0], s.diss[0]);
+  kick<kFirst>(v.y, f.y, fe.y, fd.y, inv_m, h, s.work[1], s.diss[1]);
+  kick<kFirst>(v.z, f.z, fe.z, fd.z, inv_m, h, s.work[2], s.diss[2]);
+  kick<kFirst>(w.x, t.x, te.x, td.x, inv_I, h, s.work[3], s.diss[3]);
+  kick<kFirst>(w.y, t.y, te.y, td.y, inv_I, h, s.work[4], s.diss[4]);
+  kick<kFirst>(w.z, t.z, te.z, td.z, inv_I, h, s.work[5], s.diss[5]);
 }
 
 // The lanes' shares of a pass's work and dissipation: each lane's terms summed in the scalar

@@ -79,16 +79,17 @@ auto each(const Body& body) {
 }
 
 // A range body that runs whole chunks of free isotropic elements in SIMD lanes (step_simd.h)
-// where `pass` is set, and the others, and what the lanes leave, element by element. kS2, kS1:
-// where pass 2's and pass 1's sums start in the body's sums.
-template <std::size_t kS2, std::size_t kS1, class Body>
+// where `pass` is set, and the others, and what the lanes leave, element by element. The body's
+// sums start with the pass's own (pass 2's when it runs, else pass 1's); kS1: where pass 1's
+// start when both run.
+template <std::size_t kS1, class Body>
 auto chunked(const step_simd::Pass* pass, long lanes, const Body& body) {
   return [ pass, lanes, body ](long b, long e, auto& s, auto& marks)
       __attribute__((always_inline)) {
     for (long i = b; i < e;) {
       long stop = e;
       if (pass) {
-        i = step_simd::run(*pass, i, e, s.data() + kS2, s.data() + kS1, &marks[0]);
+        i = step_simd::run(*pass, i, e, s.data(), s.data() + kS1, &marks[0]);
         stop = std::min(e, i + lanes);
       }
       for (; i < stop; ++i) body(i, s, marks);
@@ -532,7 +533,7 @@ void System::run(long nsteps) {
       };
       const step_simd::Pass p1 = lanes_pass(c, false, true, sink_buffers_);
       runaway = ordered_sums<2>(n, partial_sums_, {&work, &diss},
-                                chunked<0, 0>(fast ? &p1 : nullptr, lanes, first))[0];
+                                chunked<0>(fast ? &p1 : nullptr, lanes, first))[0];
     }
     if (runaway >= 0) {
       const std::size_t i = static_cast<std::size_t>(runaway);
@@ -592,12 +593,12 @@ void System::run(long nsteps) {
     if (fuse) {
       const auto marks =
           ordered_sums<6>(n, partial_sums_, {&work, &diss, &kt, &kr, &work_next, &diss_next},
-                          chunked<0, 4>(lanes2 ? &p2 : nullptr, lanes, second_first));
+                          chunked<4>(lanes2 ? &p2 : nullptr, lanes, second_first));
       runaway = marks[0];
       bad = marks[1];
     } else {
       bad = ordered_sums<4>(n, partial_sums_, {&work, &diss, &kt, &kr},
-                            chunked<0, 0>(lanes2 ? &p2 : nullptr, lanes, second))[1];
+                            chunked<0>(lanes2 ? &p2 : nullptr, lanes, second))[1];
     }
     if (c2.sink) sink_.taken();
     if (bad >= 0) check_finite_forces();  // names the element and the cause
