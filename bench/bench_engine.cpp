@@ -317,6 +317,46 @@ void BM_SparseFilmVdw(benchmark::State& state) { issue13_vdw(state, false); }
 BENCHMARK(BM_DenseFilmVdw)->Apply(one_and_two_threads);
 BENCHMARK(BM_SparseFilmVdw)->Apply(one_and_two_threads);
 
+// The vdW kernel's batch stage alone (VdwKernel::batch: the gather of the pairs' axes and the
+// SIMD lanes; no list walk, no cutoff reject, no scatter) on the relaxed dense film's first 2048
+// pairs within the cutoff, in batches of 64 as the driver fills them, evaluated over and over
+// (the batches and the axes they touch stay in the core's caches). ns_per_pair: per pair.
+void BM_DenseFilmVdwBatch(benchmark::State& state) {
+  const Elements& el = relaxed_issue13_film(true);
+  const AnisotropicVdw vdw;
+  const NeighborList nl = list_for(vdw, el);
+  const double rc2 = vdw.cutoff() * vdw.cutoff();
+  constexpr int kBatches = 32;
+  std::vector<PairBatch> batches(kBatches);
+  int filled = 0;
+  for (std::size_t i = 0; i < el.size() && filled < kBatches; ++i)
+    for (std::uint32_t m = nl.offsets()[i]; m < nl.offsets()[i + 1] && filled < kBatches; ++m) {
+      const std::uint32_t j = nl.neighbors()[m];
+      const Vec3 d = nl.domain().delta(el.x[i], el.x[j]);
+      if (d.squaredNorm() >= rc2) continue;
+      PairBatch& b = batches[filled];
+      b.i[b.n] = static_cast<std::uint32_t>(i);
+      b.j[b.n] = j;
+      b.dx[b.n] = d.x();
+      b.dy[b.n] = d.y();
+      b.dz[b.n] = d.z();
+      if (++b.n == PairBatch::kCapacity) ++filled;
+    }
+  const VdwKernel& k = vdw.kernel();
+  k.begin(el);
+  for (long i = 0; i < static_cast<long>(el.size()); ++i) k.prepare(el, i);
+  for (auto _ : state) {
+    for (PairBatch& b : batches) k.batch(el, b);
+    benchmark::ClobberMemory();
+  }
+  state.counters["ns_per_pair"] =
+      benchmark::Counter(static_cast<double>(filled) * PairBatch::kCapacity *
+                             static_cast<double>(state.iterations()) * 1e-9,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.SetLabel(vdw_simd_target());
+}
+BENCHMARK(BM_DenseFilmVdwBatch);
+
 // The neighbour phase of the relaxed dense film against the skin (skin_pm: picometres, 500 =
 // the default 0.5 nm): 60 steps at 1 thread from the relaxed state, the list's rebuilds per step,
 // the CPU time of one build and of one displacement check (the per-step test against skin/2),
