@@ -3,6 +3,7 @@
 // not reduced).
 #include <gtest/gtest.h>
 
+#include <stdexcept>
 #include <vector>
 
 #include "mdem/force/force_model.h"
@@ -99,4 +100,41 @@ TEST(ForceSink, SecondReduceWithoutAnEvaluationGivesZero) {
   EXPECT_EQ(f[4], Vec3(1, 2, 3));
   sink.reduce(f, t, fd, td);
   EXPECT_EQ(f[4], Vec3::Zero());
+}
+
+// Damping force buffers without damping torque buffers (no dissipative model writes torques):
+// reduce() and take() give zero damping torques, the other sums as with them, and asking for the
+// absent buffers names the cause instead of handing out memory.
+TEST(ForceSink, WithoutDampingTorqueBuffersTheDampingTorquesAreZero) {
+  const std::size_t n = 3000;
+  for (int nt : {1, 2}) {
+    ForceSink with, without;
+    with.resize(n, nt, true, true);
+    without.resize(n, nt, true, false);
+    EXPECT_TRUE(without.has_damping());
+    EXPECT_FALSE(without.has_damping_torque());
+    EXPECT_LT(without.memory_bytes(), with.memory_bytes());
+    EXPECT_THROW(without.damping_torque(0), std::logic_error);
+    without.clear();
+    for (int k = 0; k < nt; ++k)
+      for (std::size_t i = 0; i < n; ++i) {
+        without.force(k)[i] += Vec3(1.0 + k, 2.0, 3.0);
+        without.damping_force(k)[i] += Vec3(0.5, -1.0, 2.0 * k);
+      }
+    std::vector<Vec3> f(n), t(n), fd(n), td(n, Vec3(9, 9, 9));
+    without.reduce(f, t, fd, td);
+    const double nk = nt;
+    for (std::size_t i = 0; i < n; ++i) {
+      ASSERT_EQ(f[i], Vec3(nk + (nt == 2 ? 1.0 : 0.0), 2.0 * nk, 3.0 * nk)) << i;
+      ASSERT_EQ(fd[i], Vec3(0.5 * nk, -nk, nt == 2 ? 2.0 : 0.0)) << i;
+      ASSERT_EQ(td[i], Vec3::Zero()) << i;
+    }
+    // take(), element by element, as the integrator's pass does.
+    without.clear();
+    without.damping_force(nt - 1)[7] += Vec3(1, 2, 3);
+    Vec3 fi, ti, fdi, tdi(9, 9, 9);
+    without.take(7, fi, ti, &fdi, &tdi);
+    EXPECT_EQ(fdi, Vec3(1, 2, 3));
+    EXPECT_EQ(tdi, Vec3::Zero());
+  }
 }

@@ -1,3 +1,5 @@
+#include <stdexcept>
+
 #include "mdem/core/capacity_bytes.h"
 #include "mdem/force/force_model.h"
 
@@ -16,18 +18,27 @@ inline Vec3 take_sum(std::vector<std::vector<Vec3>>& buffers, std::size_t i, int
 }
 }  // namespace
 
-void ForceSink::resize(std::size_t n, int n_threads, bool with_damping) {
+void ForceSink::resize(std::size_t n, int n_threads, bool with_damping, bool with_damping_torque) {
   force_.assign(n_threads, std::vector<Vec3>(n, Vec3::Zero()));
   torque_.assign(n_threads, std::vector<Vec3>(n, Vec3::Zero()));
-  if (with_damping) {
+  if (with_damping)
     damp_force_.assign(n_threads, std::vector<Vec3>(n, Vec3::Zero()));
-    damp_torque_.assign(n_threads, std::vector<Vec3>(n, Vec3::Zero()));
-  } else {
+  else
     damp_force_.clear();
+  if (with_damping && with_damping_torque)
+    damp_torque_.assign(n_threads, std::vector<Vec3>(n, Vec3::Zero()));
+  else
     damp_torque_.clear();
-  }
   energy_.assign(n_threads, EnergyTally{});
   zeroed_ = true;
+}
+
+Vec3* ForceSink::damping_torque(int thread) {
+  if (damp_torque_.empty())
+    throw std::logic_error(
+        "ForceSink: no damping torque buffers (a dissipative model that writes torques must "
+        "return true from damping_torques())");
+  return damp_torque_[thread].data();
 }
 
 void ForceSink::clear() {
@@ -38,16 +49,14 @@ void ForceSink::clear() {
   }
   const int nt = threads();
   const std::size_t n = nt ? force_[0].size() : 0;
-  const bool damp = has_damping();
+  const bool damp = has_damping(), damp_t = has_damping_torque();
 #pragma omp parallel for schedule(static) if (static_cast <long>(n) >= kParallelMinItems)
   for (std::size_t i = 0; i < n; ++i) {
     for (int k = 0; k < nt; ++k) {
       force_[k][i].setZero();
       torque_[k][i].setZero();
-      if (damp) {
-        damp_force_[k][i].setZero();
-        damp_torque_[k][i].setZero();
-      }
+      if (damp) damp_force_[k][i].setZero();
+      if (damp_t) damp_torque_[k][i].setZero();
     }
   }
 }
@@ -56,14 +65,14 @@ EnergyTally ForceSink::reduce(std::vector<Vec3>& f, std::vector<Vec3>& t, std::v
                               std::vector<Vec3>& td) {
   const int nt = threads();
   const std::size_t n = nt ? force_[0].size() : 0;
-  const bool damp = has_damping();
+  const bool damp = has_damping(), damp_t = has_damping_torque();
 #pragma omp parallel for schedule(static) if (static_cast <long>(n) >= kParallelMinItems)
   for (std::size_t i = 0; i < n; ++i) {
     f[i] = take_sum(force_, i, nt);
     t[i] = take_sum(torque_, i, nt);
     if (damp) {
       fd[i] = take_sum(damp_force_, i, nt);
-      td[i] = take_sum(damp_torque_, i, nt);
+      td[i] = damp_t ? take_sum(damp_torque_, i, nt) : Vec3::Zero();
     }
   }
   zeroed_ = true;

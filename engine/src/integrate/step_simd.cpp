@@ -158,7 +158,9 @@ HWY_INLINE bool chunk(const Pass& p, long i, double* s2, double* s1, long* runaw
   const V3 f = sink ? thread_sum(p.sink_f, nt, i) : load3(p.f, i);
   const V3 t = sink ? thread_sum(p.sink_t, nt, i) : load3(p.t, i);
   V3 fd = sink_damp ? thread_sum(p.sink_fd, nt, i) : load3(p.fd, i);
-  V3 td = sink_damp ? thread_sum(p.sink_td, nt, i) : load3(p.td, i);
+  V3 td = !sink_damp             ? load3(p.td, i)
+          : p.sink_td != nullptr ? thread_sum(p.sink_td, nt, i)
+                                 : V3{zero, zero, zero};
   const bool damped = kSecond && p.alpha > 0;
   Terms t2, t1;
   V kt = zero, kr = zero;
@@ -223,10 +225,8 @@ HWY_INLINE bool chunk(const Pass& p, long i, double* s2, double* s1, long* runaw
     for (int k = 0; k < p.sink_threads; ++k) {
       zero3(p.sink_f[k], i);
       zero3(p.sink_t[k], i);
-      if (sink_damp) {
-        zero3(p.sink_fd[k], i);
-        zero3(p.sink_td[k], i);
-      }
+      if (sink_damp) zero3(p.sink_fd[k], i);
+      if (sink_damp && p.sink_td != nullptr) zero3(p.sink_td[k], i);
     }
     store3(f, p.f, i);
     store3(t, p.t, i);

@@ -22,7 +22,8 @@ struct Pass {
   const unsigned char* dof;  // 6 DofMode bytes per element (Free = 0)
   // The force evaluation's per-thread buffers when its sums are still to be taken
   // (ForceSink::take): sink[k] for thread k, force, torque, and the damping force and torque
-  // (null when the sink has no damping buffers); sink_threads = 0 when f, t, fd, td hold them.
+  // (null when the sink has no damping buffers; sink_td also when it has no damping torque
+  // buffers, td then zero); sink_threads = 0 when f, t, fd, td hold them.
   double* const* sink_f = nullptr;
   double* const* sink_t = nullptr;
   double* const* sink_fd = nullptr;

@@ -128,17 +128,15 @@ step_simd::Pass lanes_pass(const step::StepContext& c, bool second, bool first,
     for (int k = 0; k < nt; ++k) {
       buffers[k] = reinterpret_cast<double*>(c.sink->force(k));
       buffers[nt + k] = reinterpret_cast<double*>(c.sink->torque(k));
-      if (c.sink->has_damping()) {
+      if (c.sink->has_damping())
         buffers[2 * nt + k] = reinterpret_cast<double*>(c.sink->damping_force(k));
+      if (c.sink->has_damping_torque())
         buffers[3 * nt + k] = reinterpret_cast<double*>(c.sink->damping_torque(k));
-      }
     }
     p.sink_f = buffers.data();
     p.sink_t = buffers.data() + nt;
-    if (c.sink->has_damping()) {
-      p.sink_fd = buffers.data() + 2 * nt;
-      p.sink_td = buffers.data() + 3 * nt;
-    }
+    if (c.sink->has_damping()) p.sink_fd = buffers.data() + 2 * nt;
+    if (c.sink->has_damping_torque()) p.sink_td = buffers.data() + 3 * nt;
     p.sink_threads = nt;
   }
   p.dt = c.dt;
@@ -242,9 +240,10 @@ void System::initialize() {
   omp_set_num_threads(threads_);
 
   dissipative_ = s.local_damping > 0;
-  bool model_damping = false;
+  bool model_damping = false, model_damping_torque = false;
   for (const auto& m : models_) {
     model_damping = model_damping || m->dissipative();
+    model_damping_torque = model_damping_torque || (m->dissipative() && m->damping_torques());
     m->bind_domain(domain_.get());
   }
   dissipative_ = dissipative_ || model_damping;
@@ -270,7 +269,7 @@ void System::initialize() {
     }
 
   const std::size_t n = el_.size();
-  sink_.resize(n, threads_, model_damping);
+  sink_.resize(n, threads_, model_damping, model_damping_torque);
   partial_sums_.assign(threads_, ThreadSlot{});
   respa_.setup(s.respa_k, n);
   fd_.assign(n, Vec3::Zero());

@@ -34,8 +34,12 @@ inline constexpr long kParallelMinItems = 2048;
 // damping_force()/damping_torque(), so the integrator can book the energy they dissipate.
 class ForceSink {
  public:
-  // with_damping: allocate the damping buffers (only when some model is dissipative).
-  void resize(std::size_t n_elements, int n_threads, bool with_damping);
+  // with_damping: allocate the damping force buffers (only when some model is dissipative);
+  // with_damping_torque: the damping torque buffers too (only when some dissipative model writes
+  // torques: none of the dashpots does, and on a film the integrator's pass would otherwise read
+  // and zero 24 bytes per element and thread of zeros every step).
+  void resize(std::size_t n_elements, int n_threads, bool with_damping,
+              bool with_damping_torque = true);
   // Zeroes the buffers (a pass over them only when reduce() did not leave them zero) and the
   // energies, for the models to write.
   void clear();
@@ -43,10 +47,14 @@ class ForceSink {
   Vec3* force(int thread) { return force_[thread].data(); }
   Vec3* torque(int thread) { return torque_[thread].data(); }
   Vec3* damping_force(int thread) { return damp_force_[thread].data(); }
-  Vec3* damping_torque(int thread) { return damp_torque_[thread].data(); }
+  // Throws std::logic_error when the sink has no damping torque buffers (a dissipative model
+  // that writes torques must say so: ForceModel::damping_torques()).
+  Vec3* damping_torque(int thread);
   EnergyTally& energy(int thread) { return energy_[thread]; }
   bool has_damping() const { return !damp_force_.empty(); }
-  // Sums all threads in a fixed order into f, t (and fd, td when damping buffers exist),
+  bool has_damping_torque() const { return !damp_torque_.empty(); }
+  // Sums all threads in a fixed order into f, t (and fd, td when damping buffers exist; td zero
+  // without damping torque buffers),
   // overwriting them, and returns the summed energy tally. Zeroes each buffer entry as it reads
   // it (one pass over the buffers, so the next clear() has none to make): a second reduce()
   // without an evaluation in between returns zero forces.
@@ -64,7 +72,10 @@ class ForceSink {
     take_one(torque_, i, nt, t);
     if (!damp_force_.empty()) {
       take_one(damp_force_, i, nt, *fd);
-      take_one(damp_torque_, i, nt, *td);
+      if (!damp_torque_.empty())
+        take_one(damp_torque_, i, nt, *td);
+      else
+        td->setZero();
     }
   }
   void taken() { zeroed_ = true; }
@@ -137,6 +148,8 @@ class ForceModel : public ElementIndexHolder {
 
   // True for velocity-dependent (damping) models, which write to the sink's damping buffers.
   virtual bool dissipative() const { return false; }
+  // True for a dissipative model that writes damping torques (the sink then has their buffers).
+  virtual bool damping_torques() const { return false; }
   // Fast unless the model says its forces vary slowly enough for the outer step (Timescale).
   virtual Timescale timescale() const { return Timescale::Fast; }
 

@@ -115,9 +115,14 @@ template <class K>
 inline Vec3* force_buffer(ForceSink& sink, int tid) {
   return K::kDissipative ? sink.damping_force(tid) : sink.force(tid);
 }
+// Null for a kernel without torques (a sink has damping torque buffers only for a model that
+// writes damping torques).
 template <class K>
 inline Vec3* torque_buffer(ForceSink& sink, int tid) {
-  return K::kDissipative ? sink.damping_torque(tid) : sink.torque(tid);
+  if constexpr (!K::kTorques)
+    return nullptr;
+  else
+    return K::kDissipative ? sink.damping_torque(tid) : sink.torque(tid);
 }
 
 // Thread tid's rows [first, second) of a list with row offsets `off`: contiguous, so each thread
@@ -444,6 +449,7 @@ class PairModel : public ForceModel {
     return k_.excludes(el, i, j);
   }
   bool dissipative() const override { return K::kDissipative; }
+  bool damping_torques() const override { return K::kDissipative && K::kTorques; }
   Timescale timescale() const override {
     if constexpr (requires { K::kTimescale; })
       return K::kTimescale;

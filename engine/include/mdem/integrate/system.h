@@ -198,6 +198,7 @@ class System {
   double energy_balance_error() const;
   // Damping forces of the last evaluation (contact dashpots + local damping), per element.
   const std::vector<Vec3>& damping_forces() const { return fd_; }
+  const std::vector<Vec3>& damping_torques() const { return td_; }
   // The neighbour sub-list of the first pair model (null without pair models), and that of model
   // m (null when m is not a pair model of this system).
   const NeighborList* neighbors() const {
