@@ -121,10 +121,10 @@ TEST(StepForceSums, RunsRepeatBitForBitAndTwoThreadsMatchOne) {
   EXPECT_LT(dv, 1e-9 * vmax);
 }
 
-TEST(StepForceSums, DashpotsWithoutTorquesGetNoDampingTorqueBuffers) {
+TEST(StepForceSums, DashpotsWithoutTorquesLeaveTheDampingTorquesZero) {
   // No dashpot writes torques, so the sink holds damping force buffers only and the pass takes
-  // zero damping torques (the scalar take and the lanes alike): the damping torques stay exactly
-  // zero while the dashpots dissipate, on 1 and 2 threads, and the books balance as above.
+  // zero damping torques (the scalar take and the lanes alike): with no local damping the
+  // damping torques must stay exactly zero while the dashpots dissipate, on 1 and 2 threads.
   for (int threads : {1, 2}) {
     System sys = film(threads, true);
     sys.initialize();
