@@ -5,19 +5,6 @@
 
 namespace mdem {
 
-namespace {
-// Entry i of the threads' buffers summed in thread order, each entry zeroed as it is read.
-inline Vec3 take_sum(std::vector<std::vector<Vec3>>& buffers, std::size_t i, int nt) {
-  Vec3 sum = buffers[0][i];
-  buffers[0][i].setZero();
-  for (int k = 1; k < nt; ++k) {
-    sum += buffers[k][i];
-    buffers[k][i].setZero();
-  }
-  return sum;
-}
-}  // namespace
-
 void ForceSink::resize(std::size_t n, int n_threads, bool with_damping, bool with_damping_torque) {
   force_.assign(n_threads, std::vector<Vec3>(n, Vec3::Zero()));
   torque_.assign(n_threads, std::vector<Vec3>(n, Vec3::Zero()));
@@ -68,11 +55,14 @@ EnergyTally ForceSink::reduce(std::vector<Vec3>& f, std::vector<Vec3>& t, std::v
   const bool damp = has_damping(), damp_t = has_damping_torque();
 #pragma omp parallel for schedule(static) if (static_cast <long>(n) >= kParallelMinItems)
   for (std::size_t i = 0; i < n; ++i) {
-    f[i] = take_sum(force_, i, nt);
-    t[i] = take_sum(torque_, i, nt);
+    take_one(force_, i, nt, f[i]);
+    take_one(torque_, i, nt, t[i]);
     if (damp) {
-      fd[i] = take_sum(damp_force_, i, nt);
-      td[i] = damp_t ? take_sum(damp_torque_, i, nt) : Vec3::Zero();
+      take_one(damp_force_, i, nt, fd[i]);
+      if (damp_t)
+        take_one(damp_torque_, i, nt, td[i]);
+      else
+        td[i].setZero();
     }
   }
   zeroed_ = true;

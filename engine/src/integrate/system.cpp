@@ -243,7 +243,7 @@ void System::initialize() {
   bool model_damping = false, model_damping_torque = false;
   for (const auto& m : models_) {
     model_damping = model_damping || m->dissipative();
-    model_damping_torque = model_damping_torque || (m->dissipative() && m->damping_torques());
+    model_damping_torque = model_damping_torque || m->damping_torques();
     m->bind_domain(domain_.get());
   }
   dissipative_ = dissipative_ || model_damping;
