@@ -1,10 +1,14 @@
 #include "mdem/sqlite_db.h"
 
+#include <algorithm>
+#include <chrono>
 #include <filesystem>
+#include <thread>
 
 namespace mdem {
 
 namespace fs = std::filesystem;
+using namespace std::chrono_literals;
 
 SqliteDb::SqliteDb(std::string path, std::string label, const char* synchronous,
                    int busy_timeout_ms, const Recognizer& recognize)
@@ -31,7 +35,7 @@ SqliteDb::SqliteDb(std::string path, std::string label, const char* synchronous,
     // then is the journal switched to WAL (which rewrites the header).
     exec("SELECT COUNT(*) FROM sqlite_master", "cannot read (is it an SQLite database?)");
     if (recognize) recognize(*this);
-    exec("PRAGMA journal_mode=WAL", "cannot switch to WAL");
+    switch_to_wal(busy_timeout_ms);
     exec((std::string("PRAGMA synchronous=") + synchronous).c_str(), "cannot configure");
     exec("PRAGMA foreign_keys=ON", "cannot configure");
   } catch (...) {
@@ -46,6 +50,22 @@ SqliteDb::SqliteDb(std::string path, std::string label, const char* synchronous,
 SqliteDb::~SqliteDb() {
   for (auto& [sql, s] : statements_) sqlite3_finalize(s);
   if (db_) sqlite3_close_v2(db_);
+}
+
+// Two connections opening a new (rollback-journal) database at once can both hold the read lock
+// and both ask for the exclusive lock the switch needs: SQLite fails one of them at once with
+// SQLITE_BUSY rather than wait (waiting would deadlock), so the busy timeout never runs. The loser
+// holds no lock once its statement has failed; it tries again, for up to the busy timeout, by
+// when the winner has switched the file (switching a WAL file again takes no exclusive lock).
+void SqliteDb::switch_to_wal(int busy_timeout_ms) {
+  using Clock = std::chrono::steady_clock;
+  const auto deadline = Clock::now() + std::chrono::milliseconds(busy_timeout_ms);
+  for (auto pause = std::chrono::milliseconds(1);; pause = std::min(2 * pause, 50ms)) {
+    const int rc = sqlite3_exec(db_, "PRAGMA journal_mode=WAL", nullptr, nullptr, nullptr);
+    if (rc == SQLITE_OK) return;
+    if ((rc & 0xff) != SQLITE_BUSY || Clock::now() + pause > deadline) fail("cannot switch to WAL");
+    std::this_thread::sleep_for(pause);
+  }
 }
 
 void SqliteDb::fail(const std::string& what) const {

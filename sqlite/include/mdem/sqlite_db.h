@@ -47,6 +47,8 @@ class SqliteDb {
   bool has_column(const std::string& table, const std::string& column);
 
  private:
+  void switch_to_wal(int busy_timeout_ms);
+
   std::string path_, label_;
   sqlite3* db_ = nullptr;
   std::map<std::string, sqlite3_stmt*> statements_;  // prepared once, reset after each use
