@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "hwy/targets.h"
 #include "mdem/core/cnt.h"
 #include "mdem/core/domain.h"
 #include "mdem/force/bond/parallel_bond.h"
@@ -157,25 +158,32 @@ TEST(Domain, PeriodicNeighbourListEqualsBruteForceMinimumImage) {
       {Vec3(40, 25, 9), {true, false, true}, 1500},                            // many cells
       {Vec3(40, 40, 40), {false, false, false}, 2000},                         // open
   };
-  for (const Case& c : cases) {
-    const Vec3 lo(-3, 1, 2);
-    const Domain d(lo, lo + c.box, c.periodic);
-    std::mt19937_64 g(7 + c.n);
-    std::uniform_real_distribution<double> u(-0.3, 1.3);  // 30 % beyond the box on each side
-    std::vector<Vec3> xs(c.n);
-    for (auto& x : xs)
-      for (int a = 0; a < 3; ++a) x[a] = lo[a] + c.box[a] * u(g);
-    const Elements el = cloud(xs);
-    std::vector<Pair> want;
-    for (std::size_t i = 0; i < c.n; ++i)
-      for (std::size_t j = i + 1; j < c.n; ++j)
-        if (shortest_image(xs[i], xs[j], c.box, c.periodic).squaredNorm() < range * range)
-          want.emplace_back(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j));
-    ASSERT_GT(want.size(), c.n / 10);
-    NeighborList nl(cutoff, skin, d);
-    nl.build(el);
-    EXPECT_EQ(listed(nl, c.n), want) << "box " << c.box.transpose();
+  // On every instruction set the build's candidate test is compiled for (the same pairs).
+  for (std::int64_t target : hwy::SupportedAndGeneratedTargets()) {
+    hwy::SetSupportedTargetsForTest(target);
+    ASSERT_STREQ(neighbor_scan_target(), hwy::TargetName(target));
+    for (const Case& c : cases) {
+      const Vec3 lo(-3, 1, 2);
+      const Domain d(lo, lo + c.box, c.periodic);
+      std::mt19937_64 g(7 + c.n);
+      std::uniform_real_distribution<double> u(-0.3, 1.3);  // 30 % beyond the box on each side
+      std::vector<Vec3> xs(c.n);
+      for (auto& x : xs)
+        for (int a = 0; a < 3; ++a) x[a] = lo[a] + c.box[a] * u(g);
+      const Elements el = cloud(xs);
+      std::vector<Pair> want;
+      for (std::size_t i = 0; i < c.n; ++i)
+        for (std::size_t j = i + 1; j < c.n; ++j)
+          if (shortest_image(xs[i], xs[j], c.box, c.periodic).squaredNorm() < range * range)
+            want.emplace_back(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j));
+      ASSERT_GT(want.size(), c.n / 10);
+      NeighborList nl(cutoff, skin, d);
+      nl.build(el);
+      EXPECT_EQ(listed(nl, c.n), want)
+          << "box " << c.box.transpose() << ", " << hwy::TargetName(target);
+    }
   }
+  hwy::SetSupportedTargetsForTest(0);
 }
 
 // Two crossed segments across the x boundary of a periodic box interact exactly as the same pair

@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "hwy/targets.h"
 #include "mdem/core/cnt.h"
 #include "mdem/force/bond/parallel_bond.h"
 #include "mdem/neighbor/neighbor_list.h"
@@ -227,6 +228,32 @@ TEST(NeighborList, FilmMatchesBruteForceWithAndWithoutExclusion) {
   expect_matches_brute_force(el, same_tube_close);
 }
 
+// The build's candidate test on every instruction set it is compiled for (AVX-512, AVX2, SSE4,
+// plain C++): the same pairs as the brute force, on a film, a uniform cloud and a lattice whose
+// spacing is the range (differences of lattice positions land on either side of it by rounding, so
+// this exercises the strict comparison on both sides).
+TEST(NeighborList, EveryInstructionSetListsTheBruteForcePairs) {
+  const std::vector<std::int64_t> targets = hwy::SupportedAndGeneratedTargets();
+  EXPECT_GE(targets.size(), 2u);  // at least a vector set and the plain C++ fallback
+  const Elements film = small_film(5);
+  const Elements uniform = cloud(uniform_box(3000, Vec3(0, 0, 0), Vec3(40, 40, 40), 11));
+  const double range = kCutoff + kSkin;
+  std::vector<Vec3> lattice;
+  for (int a = 0; a < 6; ++a)
+    for (int b = 0; b < 6; ++b)
+      for (int c = 0; c < 6; ++c) lattice.push_back(range * Vec3(a, b, c));
+  const Elements grid = cloud(lattice);
+  for (std::int64_t target : targets) {
+    hwy::SetSupportedTargetsForTest(target);
+    SCOPED_TRACE(hwy::TargetName(target));
+    ASSERT_STREQ(neighbor_scan_target(), hwy::TargetName(target));
+    expect_matches_brute_force(film, same_tube_close);
+    expect_matches_brute_force(uniform);
+    expect_matches_brute_force(grid);
+  }
+  hwy::SetSupportedTargetsForTest(0);
+}
+
 TEST(NeighborList, ExclusionIsRespected) {
   // Straight tube: every pair within range is on one tube within 20 indices, so the vdW-style
   // exclusion empties the list; an "exclude odd i" rule keeps exactly the pairs with even i.
@@ -268,6 +295,10 @@ TEST(NeighborList, SameResultForAnyThreadCount) {
   const Elements el = small_film(9, 150, 60, 120);
   ASSERT_GT(el.size(), 8000u);
   std::vector<std::vector<std::uint32_t>> offsets, neighbors;
+  // A list built anew at each team size, and one list rebuilt at each (its scratch, sized per
+  // thread, reused by teams of other sizes).
+  NeighborList reused(kCutoff, kSkin);
+  reused.set_exclusion(same_tube_close);
   for (int threads : {1, 2, 3, 1}) {
     omp_set_num_threads(threads);
     NeighborList nl(kCutoff, kSkin);
@@ -275,6 +306,9 @@ TEST(NeighborList, SameResultForAnyThreadCount) {
     nl.build(el);
     offsets.push_back(nl.offsets());
     neighbors.push_back(nl.neighbors());
+    reused.build(el);
+    offsets.push_back(reused.offsets());
+    neighbors.push_back(reused.neighbors());
   }
   for (std::size_t k = 1; k < offsets.size(); ++k) {
     EXPECT_TRUE(offsets[k] == offsets[0]) << "run " << k;

@@ -12,6 +12,7 @@
 #include "mdem/core/capacity_bytes.h"
 #include "mdem/force/force_model.h"
 #include "mdem/io/state_io.h"
+#include "neighbor/cell_scan_simd.h"
 
 namespace mdem {
 
@@ -142,36 +143,77 @@ void NeighborList::build(const Elements& el) {
   Vec3 inv_w;
   for (int d = 0; d < 3; ++d) inv_w[d] = ext[d] > 0 ? static_cast<double>(dims[d]) / ext[d] : 0.0;
 
-  // Counting sort of the elements into cells, stable in element index (the cells of the
-  // elements threaded, the counts and the scatter in element order).
+  // Counting sort of the elements into cells, stable in element index, on the team: each thread
+  // takes a contiguous range of the elements (its part of the cells' contents in element order)
+  // and counts their cells; a cell's elements are laid out thread by thread, so in element
+  // order, the starts found by a scan over the cells in ranges (each thread's range summed, the
+  // ranges' sums added in order, each range scanned from its base); each thread then places its
+  // own elements. The result is the serial sort's, whatever the thread count (it was serial: a
+  // quarter of a 2-thread build on the dense film).
   constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   cell_of_.resize(n);
-  cell_start_.assign(n_cells + 1, 0u);
-#pragma omp parallel for schedule(static) if (threaded)
-  for (long i = 0; i < nl; ++i) {
-    if (!binned(static_cast<std::size_t>(i))) {
-      cell_of_[i] = kNone;
-      continue;
+  cell_start_.resize(n_cells + 1);
+  // Padded so that the scan's vectors may read past a run's end (the padding is never kept).
+  cell_elem_.resize(n_binned + cell_scan::kPad, 0u);
+  cell_px_.resize(n_binned + cell_scan::kPad, 0.0);
+  cell_py_.resize(n_binned + cell_scan::kPad, 0.0);
+  cell_pz_.resize(n_binned + cell_scan::kPad, 0.0);
+  const int sort_threads = threaded ? omp_get_max_threads() : 1;
+  if (cell_count_.size() < static_cast<std::size_t>(sort_threads)) cell_count_.resize(sort_threads);
+  for (int t = 0; t < sort_threads; ++t) cell_count_[t].resize(n_cells);
+  range_sum_.assign(static_cast<std::size_t>(std::max(sort_threads, omp_get_max_threads())) + 1, 0);
+  const long nc = static_cast<long>(n_cells);
+#pragma omp parallel num_threads(sort_threads)
+  {
+    const int nt = omp_get_num_threads();
+    const int tid = omp_get_thread_num();
+    const long a = nl * tid / nt, b = nl * (tid + 1) / nt;
+    std::vector<std::uint32_t>& count = cell_count_[tid];
+    std::fill(count.begin(), count.end(), 0u);
+    for (long i = a; i < b; ++i) {
+      if (!binned(static_cast<std::size_t>(i))) {
+        cell_of_[i] = kNone;
+        continue;
+      }
+      const Vec3 r = ((periodic ? domain_.wrap(el.x[i]) : el.x[i]) - lo).cwiseProduct(inv_w);
+      const long cx = std::clamp(static_cast<long>(r.x()), 0L, nx - 1);
+      const long cy = std::clamp(static_cast<long>(r.y()), 0L, ny - 1);
+      const long cz = std::clamp(static_cast<long>(r.z()), 0L, nz - 1);
+      const auto c = static_cast<std::uint32_t>(cx + nx * (cy + ny * cz));
+      cell_of_[i] = c;
+      ++count[c];
     }
-    const Vec3 r = ((periodic ? domain_.wrap(el.x[i]) : el.x[i]) - lo).cwiseProduct(inv_w);
-    const long cx = std::clamp(static_cast<long>(r.x()), 0L, nx - 1);
-    const long cy = std::clamp(static_cast<long>(r.y()), 0L, ny - 1);
-    const long cz = std::clamp(static_cast<long>(r.z()), 0L, nz - 1);
-    cell_of_[i] = static_cast<std::uint32_t>(cx + nx * (cy + ny * cz));
+#pragma omp barrier
+    // This thread's range of cells: their elements over all threads, summed.
+    const long ca = nc * tid / nt, cb = nc * (tid + 1) / nt;
+    std::size_t sum = 0;
+    for (long c = ca; c < cb; ++c)
+      for (int t = 0; t < nt; ++t) sum += cell_count_[t][c];
+    range_sum_[tid + 1] = sum;
+#pragma omp barrier
+    std::uint32_t at = 0;
+    for (int t = 0; t <= tid; ++t) at += static_cast<std::uint32_t>(range_sum_[t]);
+    // Each thread's count becomes where its next element of the cell goes.
+    for (long c = ca; c < cb; ++c) {
+      cell_start_[c] = at;
+      for (int t = 0; t < nt; ++t) {
+        const std::uint32_t k = cell_count_[t][c];
+        cell_count_[t][c] = at;
+        at += k;
+      }
+    }
+    if (tid == nt - 1) cell_start_[n_cells] = at;
+#pragma omp barrier
+    for (long i = a; i < b; ++i) {
+      const std::uint32_t c = cell_of_[i];
+      if (c == kNone) continue;
+      const std::uint32_t k = count[c]++;
+      cell_elem_[k] = static_cast<std::uint32_t>(i);
+      cell_px_[k] = el.x[i].x();
+      cell_py_[k] = el.x[i].y();
+      cell_pz_[k] = el.x[i].z();
+    }
   }
-  for (std::size_t i = 0; i < n; ++i)
-    if (cell_of_[i] != kNone) ++cell_start_[cell_of_[i] + 1];
-  for (std::size_t c = 0; c < n_cells; ++c) cell_start_[c + 1] += cell_start_[c];
-  cell_elem_.resize(n_binned);
-  cell_x_.resize(n_binned);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (cell_of_[i] == kNone) continue;
-    const std::uint32_t k = cell_start_[cell_of_[i]]++;  // start of cell c moves to its end
-    cell_elem_[k] = static_cast<std::uint32_t>(i);
-    cell_x_[k] = el.x[i];
-  }
-  for (std::size_t c = n_cells; c > 0; --c) cell_start_[c] = cell_start_[c - 1];
-  cell_start_[0] = 0;
 
   // The cells within kReach of cell c along one axis, as at most two runs [first, last]: one run
   // clipped at the grid's ends on an open axis; on a periodic axis the run wraps (split in two at
@@ -221,6 +263,16 @@ void NeighborList::build(const Elements& el) {
   chunk_pos_.resize(n_chunks);
   const Exclusion* exclusion = exclusion_ ? &exclusion_ : nullptr;
   std::string error;
+  const cell_scan::Cells cells{cell_px_.data(), cell_py_.data(), cell_pz_.data(),
+                               cell_elem_.data()};
+  cell_scan::Probe probe_0{};
+  probe_0.range2 = range2;
+  for (int d = 0; d < 3; ++d)
+    if (domain_.periodic(d)) {
+      probe_0.length[d] = domain_.length()[d];
+      probe_0.inv_length[d] = 1.0 / domain_.length()[d];
+    }
+  x_at_build_.resize(n);  // filled by the team once the list is built
 
 #pragma omp parallel num_threads(max_threads)
   {
@@ -229,6 +281,7 @@ void NeighborList::build(const Elements& el) {
     // `out` is used as a raw buffer: its size is its usable capacity, `used` the filled part.
     std::vector<std::uint32_t>& out = thread_neighbors_[tid];
     std::size_t used = 0;
+    cell_scan::Probe probe = probe_0;
     try {
       for (std::size_t chunk = static_cast<std::size_t>(tid); chunk < n_chunks; chunk += nt) {
         chunk_pos_[chunk] = used;
@@ -242,46 +295,34 @@ void NeighborList::build(const Elements& el) {
           const long cx = c % nx, cy = (c / nx) % ny, cz = c / (nx * ny);
           const Runs rx = runs(cx, nx, wrap_x), ry = runs(cy, ny, wrap_y),
                      rz = runs(cz, nz, wrap_z);
-          // Calls row(kb, ke) for each contiguous run of candidates in the block.
-          auto for_each_run = [&](auto&& row) {
-            for (int a = 0; a < rz.count; ++a)
-              for (long z = rz.first[a]; z <= rz.last[a]; ++z)
-                for (int b = 0; b < ry.count; ++b)
-                  for (long y = ry.first[b]; y <= ry.last[b]; ++y) {
-                    const long base = nx * (y + ny * z);
-                    for (int e = 0; e < rx.count; ++e)
-                      row(cell_start_[base + rx.first[e]], cell_start_[base + rx.last[e] + 1]);
-                  }
-          };
-          // Room for every candidate, so the scan can write before it tests.
+          // The contiguous runs of candidates in the block: at most 2 × 3 × 3 (wrapping axes
+          // split a run in two).
+          std::uint32_t run_begin[18], run_end[18];
+          int n_runs = 0;
           std::size_t candidates = 0;
-          for_each_run([&](std::uint32_t kb, std::uint32_t ke) { candidates += ke - kb; });
-          if (out.size() < used + candidates)
-            out.resize(std::max(2 * out.size(), used + candidates));
-          const Vec3 xi = el.x[i];
-          const auto ii = static_cast<std::uint32_t>(i);
+          for (int a = 0; a < rz.count; ++a)
+            for (long z = rz.first[a]; z <= rz.last[a]; ++z)
+              for (int b = 0; b < ry.count; ++b)
+                for (long y = ry.first[b]; y <= ry.last[b]; ++y) {
+                  const long base = nx * (y + ny * z);
+                  for (int e = 0; e < rx.count; ++e) {
+                    const std::uint32_t kb = cell_start_[base + rx.first[e]],
+                                        ke = cell_start_[base + rx.last[e] + 1];
+                    if (kb == ke) continue;
+                    run_begin[n_runs] = kb;
+                    run_end[n_runs++] = ke;
+                    candidates += ke - kb;
+                  }
+                }
+          // Room for every candidate and a vector more, so the scan can store before it counts.
+          const std::size_t room = used + candidates + cell_scan::kPad;
+          if (out.size() < room) out.resize(std::max(2 * out.size(), room));
+          probe.x = el.x[i].x();
+          probe.y = el.x[i].y();
+          probe.z = el.x[i].z();
+          probe.i = static_cast<std::uint32_t>(i);
           std::uint32_t* const first = out.data() + used;
-          std::uint32_t* o = first;
-          if (!periodic) {
-            for_each_run([&](std::uint32_t kb, std::uint32_t ke) {
-              for (std::uint32_t k = kb; k < ke; ++k) {
-                // Branch-free: half the candidates fail j > i in no predictable pattern.
-                const std::uint32_t j = cell_elem_[k];
-                const bool keep = (j > ii) & ((cell_x_[k] - xi).squaredNorm() < range2);
-                *o = j;
-                o += keep;
-              }
-            });
-          } else {
-            for_each_run([&](std::uint32_t kb, std::uint32_t ke) {
-              for (std::uint32_t k = kb; k < ke; ++k) {
-                const std::uint32_t j = cell_elem_[k];
-                const bool keep = (j > ii) & (domain_.delta(xi, cell_x_[k]).squaredNorm() < range2);
-                *o = j;
-                o += keep;
-              }
-            });
-          }
+          std::uint32_t* o = cell_scan::scan(cells, probe, run_begin, run_end, n_runs, first);
           if (!all_kinds || exclusion) {  // one pass over the pairs within range
             std::uint32_t* w = first;
             for (std::uint32_t* r = first; r != o; ++r)
@@ -309,35 +350,50 @@ void NeighborList::build(const Elements& el) {
       if (error.empty()) error = "neighbour list: the exclusion predicate threw";
     }
 #pragma omp barrier
+    // The offsets: a scan of the rows' lengths over contiguous ranges of the elements, as the
+    // cells' above (it was a serial loop).
+    const std::size_t ea = n * tid / nt, eb = n * (tid + 1) / nt;
+    std::size_t part = 0;
+    for (std::size_t i = ea; i < eb; ++i) part += offsets_[i + 1];
+    range_sum_[tid + 1] = part;
+#pragma omp barrier
+    std::size_t total = 0, base = 0;
+    for (int t = 1; t <= nt; ++t) {
+      if (t <= tid) base += range_sum_[t];
+      total += range_sum_[t];
+    }
+    const bool fits = total < std::numeric_limits<std::uint32_t>::max();
+    if (error.empty() && fits)
+      for (std::size_t i = ea; i < eb; ++i) {
+        base += offsets_[i + 1];
+        offsets_[i + 1] = static_cast<std::uint32_t>(base);
+      }
 #pragma omp single
     {
       if (error.empty()) {
-        std::size_t total = 0;
-        for (std::size_t i = 0; i < n; ++i) {
-          total += offsets_[i + 1];
-          offsets_[i + 1] = static_cast<std::uint32_t>(
-              std::min<std::size_t>(total, std::numeric_limits<std::uint32_t>::max()));
-        }
-        if (total >= std::numeric_limits<std::uint32_t>::max())
+        if (!fits)
           error = "neighbour list: more than 2^32 - 1 pairs";
         else
           neighbors_.resize(total);
       }
     }  // implicit barrier
-    if (error.empty())
+    if (error.empty()) {
       for (std::size_t chunk = static_cast<std::size_t>(tid); chunk < n_chunks; chunk += nt) {
         const std::size_t first = offsets_[chunk * kChunk];
         const std::size_t last = offsets_[std::min(n, (chunk + 1) * kChunk)];
         std::copy_n(out.begin() + static_cast<std::ptrdiff_t>(chunk_pos_[chunk]), last - first,
                     neighbors_.begin() + static_cast<std::ptrdiff_t>(first));
       }
+      std::copy(el.x.begin() + static_cast<std::ptrdiff_t>(ea),
+                el.x.begin() + static_cast<std::ptrdiff_t>(eb),
+                x_at_build_.begin() + static_cast<std::ptrdiff_t>(ea));
+    }
   }
   if (!error.empty()) {
     builds_ = 0;  // the list is not usable
     throw std::runtime_error(error);
   }
 
-  x_at_build_.assign(el.x.begin(), el.x.end());
   ++builds_;
 }
 
@@ -384,10 +440,14 @@ void NeighborList::load_state(StateReader& r, std::size_t n) {
 
 namespace mdem {
 
+const char* neighbor_scan_target() { return cell_scan::target_name(); }
+
 std::size_t NeighborList::memory_bytes() const {
   return capacity_bytes(x_at_build_) + capacity_bytes(offsets_) + capacity_bytes(neighbors_) +
          capacity_bytes(cell_of_) + capacity_bytes(cell_start_) + capacity_bytes(cell_elem_) +
-         capacity_bytes(cell_x_) + capacity_bytes(thread_neighbors_) + capacity_bytes(chunk_pos_);
+         capacity_bytes(cell_px_) + capacity_bytes(cell_py_) + capacity_bytes(cell_pz_) +
+         capacity_bytes(cell_count_) + capacity_bytes(range_sum_) +
+         capacity_bytes(thread_neighbors_) + capacity_bytes(chunk_pos_);
 }
 
 }  // namespace mdem

@@ -79,9 +79,15 @@ class NeighborList {
   std::vector<std::uint32_t> cell_of_;     // cell of each element
   std::vector<std::uint32_t> cell_start_;  // CSR over cells: elements of cell c are
   std::vector<std::uint32_t> cell_elem_;   //   cell_elem_[cell_start_[c] .. cell_start_[c+1])
-  std::vector<Vec3> cell_x_;               // positions in cell order (cache-friendly scan)
+  std::vector<double> cell_px_, cell_py_, cell_pz_;  // positions in cell order (the scan's lanes)
+  std::vector<std::vector<std::uint32_t>> cell_count_;  // per thread: its elements per cell
+  std::vector<std::size_t> range_sum_;  // per thread's range: its cells' elements, rows' pairs
   std::vector<std::vector<std::uint32_t>> thread_neighbors_;  // per-thread output
   std::vector<std::size_t> chunk_pos_;  // where each chunk of elements starts in its thread's
 };
+
+// The instruction set the build's candidate test runs on, chosen at run time (Google Highway's
+// dynamic dispatch over vectors of candidates), e.g. "AVX3", "AVX2", "EMU128".
+const char* neighbor_scan_target();
 
 }  // namespace mdem
