@@ -254,6 +254,60 @@ TEST(NeighborList, EveryInstructionSetListsTheBruteForcePairs) {
   hwy::SetSupportedTargetsForTest(0);
 }
 
+// A list of some kind pairs bins each kind in a layer of its own and scans only the partner
+// kinds' layers: the same pairs as the brute force filtered by kind, for one-sided sets (NP-CNT),
+// one kind (NP-NP), mixed sets, all kinds, with an exclusion, open and periodic, on 1 and 2
+// threads and every instruction set.
+TEST(NeighborList, KindSubListsListTheBruteForcePairsOfTheirKinds) {
+  ThreadGuard guard;
+  const ElementKind C = ElementKind::CntSegment, N = ElementKind::Nanoparticle,
+                    G = ElementKind::Grain, W = ElementKind::Wall;
+  Elements el = cloud(uniform_box(4000, Vec3(0, 0, 0), Vec3(30, 30, 30), 23));
+  // Mostly segments, a few NPs, grains and walls, in no order of index.
+  std::mt19937_64 rng(5);
+  for (std::size_t i = 0; i < el.size(); ++i) {
+    const double u = unit_interval(rng());
+    el.kind[i] = u < 0.85 ? C : u < 0.92 ? N : u < 0.97 ? G : W;
+  }
+  const std::vector<KindPairs> sets = {KindPairs::of(N, C),           KindPairs::of(N, N),
+                                       KindPairs::of(C, C).add(N, C), KindPairs::of(G, W).add(G, G),
+                                       KindPairs::of(W, W),           KindPairs::all()};
+  const Domain periodic({0, 0, 0}, {30, 30, 30}, {true, true, false});
+  const NeighborList::Exclusion odd_sum = [](const Elements&, std::size_t i, std::size_t j) {
+    return (i + j) % 2 == 1;
+  };
+  const double r2 = (kCutoff + kSkin) * (kCutoff + kSkin);
+  for (const Domain& domain : {Domain{}, periodic})
+    for (const KindPairs k : sets)
+      for (const bool excluding : {false, true}) {
+        std::vector<Pair> want;
+        for (std::size_t i = 0; i < el.size(); ++i)
+          for (std::size_t j = i + 1; j < el.size(); ++j)
+            if (k.has(el.kind[i], el.kind[j]) &&
+                domain.delta(el.x[i], el.x[j]).squaredNorm() < r2 &&
+                !(excluding && odd_sum(el, i, j)))
+              want.emplace_back(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j));
+        EXPECT_FALSE(want.empty()) << k.describe();
+        for (std::int64_t target : hwy::SupportedAndGeneratedTargets())
+          for (int threads : {1, 2}) {
+            hwy::SetSupportedTargetsForTest(target);
+            omp_set_num_threads(threads);
+            SCOPED_TRACE(std::string(hwy::TargetName(target)) + ", " + k.describe() + ", " +
+                         std::to_string(threads) + " threads" +
+                         (domain.any_periodic() ? ", periodic" : "") +
+                         (excluding ? ", excluding odd sums" : ""));
+            NeighborList nl(kCutoff, kSkin, domain);
+            nl.set_kinds(k);
+            if (excluding) nl.set_exclusion(odd_sum);
+            nl.build(el);
+            const std::vector<Pair> got = listed(nl, el.size());
+            EXPECT_EQ(got.size(), want.size());
+            EXPECT_TRUE(got == want);
+          }
+      }
+  hwy::SetSupportedTargetsForTest(0);
+}
+
 TEST(NeighborList, ExclusionIsRespected) {
   // Straight tube: every pair within range is on one tube within 20 indices, so the vdW-style
   // exclusion empties the list; an "exclude odd i" rule keeps exactly the pairs with even i.

@@ -85,6 +85,23 @@ void NeighborList::build(const Elements& el) {
   const bool periodic = domain_.any_periodic();
   // Elements of kinds no listed pair involves are not binned (cell kNone).
   auto binned = [&](std::size_t i) { return all_kinds || kinds_.involves(el.kind[i]); };
+  // A list of some kind pairs bins each kind it involves in a layer of its own (the same grid),
+  // and an element scans only the layers of its partner kinds: an NP-CNT list then looks at the
+  // few NPs around a segment, not at the thousands of segments it would reject. A list of all
+  // kinds has one layer.
+  int layer_of[kElementKinds];
+  int layers = 0;
+  for (int a = 0; a < kElementKinds; ++a)
+    layer_of[a] = all_kinds ? 0 : kinds_.involves(static_cast<ElementKind>(a)) ? layers++ : -1;
+  if (all_kinds) layers = 1;
+  int partners[kElementKinds][kElementKinds];  // per kind: the layers it pairs with, then -1
+  for (int a = 0; a < kElementKinds; ++a) {
+    int m = 0;
+    for (int b = 0; b < kElementKinds; ++b)
+      if (all_kinds ? b == 0 : kinds_.has(static_cast<ElementKind>(a), static_cast<ElementKind>(b)))
+        partners[a][m++] = layer_of[b];
+    for (; m < kElementKinds; ++m) partners[a][m] = -1;
+  }
 
   // Bounding box of the current positions (wrapped into the box along periodic axes, where the
   // grid spans the box); every position must be finite. Threaded: min and max are exact, so the
@@ -122,7 +139,9 @@ void NeighborList::build(const Elements& el) {
   // Cell grid: cells at least range / kReach wide (a pair closer than `range` is then at most
   // kReach cells apart along each axis), at most max(64, 4N) cells in all (a sparse cloud over a
   // large box gets wider cells instead of a huge empty grid).
-  const double max_cells = std::max(64.0, 4.0 * static_cast<double>(n_binned));
+  // The keys (layer, cell) must fit 32 bits below the kNone mark.
+  const double max_cells = std::min(std::max(64.0, 4.0 * static_cast<double>(n_binned)),
+                                    4.0e9 / static_cast<double>(layers));
   double cell = range / kReach * (1.0 + kCellMargin);
   long dims[3];
   auto grid = [&](double c) {
@@ -143,16 +162,17 @@ void NeighborList::build(const Elements& el) {
   Vec3 inv_w;
   for (int d = 0; d < 3; ++d) inv_w[d] = ext[d] > 0 ? static_cast<double>(dims[d]) / ext[d] : 0.0;
 
-  // Counting sort of the elements into cells, stable in element index, on the team: each thread
-  // takes a contiguous range of the elements (its part of the cells' contents in element order)
-  // and counts their cells; a cell's elements are laid out thread by thread, so in element
-  // order, the starts found by a scan over the cells in ranges (each thread's range summed, the
-  // ranges' sums added in order, each range scanned from its base); each thread then places its
-  // own elements. The result is the serial sort's, whatever the thread count (it was serial: a
-  // quarter of a 2-thread build on the dense film).
+  // Counting sort of the elements into cells (keys layer · n_cells + cell), stable in element
+  // index, on the team: each thread takes a contiguous range of the elements (its part of the
+  // cells' contents in element order) and counts their cells; a cell's elements are laid out thread
+  // by thread, so in element order, the starts found by a scan over the cells in ranges (each
+  // thread's range summed, the ranges' sums added in order, each range scanned from its base); each
+  // thread then places its own elements. The result is the serial sort's, whatever the thread count
+  // (it was serial: a quarter of a 2-thread build on the dense film).
   constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   cell_of_.resize(n);
-  cell_start_.resize(n_cells + 1);
+  const std::size_t n_keys = static_cast<std::size_t>(layers) * n_cells;
+  cell_start_.resize(n_keys + 1);
   // Padded so that the scan's vectors may read past a run's end (the padding is never kept).
   cell_elem_.resize(n_binned + cell_scan::kPad, 0u);
   cell_px_.resize(n_binned + cell_scan::kPad, 0.0);
@@ -160,9 +180,10 @@ void NeighborList::build(const Elements& el) {
   cell_pz_.resize(n_binned + cell_scan::kPad, 0.0);
   const int sort_threads = threaded ? omp_get_max_threads() : 1;
   if (cell_count_.size() < static_cast<std::size_t>(sort_threads)) cell_count_.resize(sort_threads);
-  for (int t = 0; t < sort_threads; ++t) cell_count_[t].resize(n_cells);
+  for (int t = 0; t < sort_threads; ++t) cell_count_[t].resize(n_keys);
   range_sum_.assign(static_cast<std::size_t>(std::max(sort_threads, omp_get_max_threads())) + 1, 0);
-  const long nc = static_cast<long>(n_cells);
+  const long nc = static_cast<long>(n_keys);
+  const long nc_grid = static_cast<long>(n_cells);
 #pragma omp parallel num_threads(sort_threads)
   {
     const int nt = omp_get_num_threads();
@@ -179,7 +200,8 @@ void NeighborList::build(const Elements& el) {
       const long cx = std::clamp(static_cast<long>(r.x()), 0L, nx - 1);
       const long cy = std::clamp(static_cast<long>(r.y()), 0L, ny - 1);
       const long cz = std::clamp(static_cast<long>(r.z()), 0L, nz - 1);
-      const auto c = static_cast<std::uint32_t>(cx + nx * (cy + ny * cz));
+      const long layer = layer_of[static_cast<int>(el.kind[i])];
+      const auto c = static_cast<std::uint32_t>(layer * nc_grid + cx + nx * (cy + ny * cz));
       cell_of_[i] = c;
       ++count[c];
     }
@@ -202,7 +224,7 @@ void NeighborList::build(const Elements& el) {
         at += k;
       }
     }
-    if (tid == nt - 1) cell_start_[n_cells] = at;
+    if (tid == nt - 1) cell_start_[n_keys] = at;
 #pragma omp barrier
     for (long i = a; i < b; ++i) {
       const std::uint32_t c = cell_of_[i];
@@ -292,28 +314,31 @@ void NeighborList::build(const Elements& el) {
             offsets_[i + 1] = 0;
             continue;
           }
-          const long cx = c % nx, cy = (c / nx) % ny, cz = c / (nx * ny);
+          const long cell = c % nc_grid;
+          const long cx = cell % nx, cy = (cell / nx) % ny, cz = cell / (nx * ny);
           const Runs rx = runs(cx, nx, wrap_x), ry = runs(cy, ny, wrap_y),
                      rz = runs(cz, nz, wrap_z);
-          // The contiguous runs of candidates in the block: at most 2 × 3 × 3 (wrapping axes
-          // split a run in two).
-          std::uint32_t run_begin[18], run_end[18];
+          // The contiguous runs of candidates in the block: at most 2 × 3 × 3 per partner
+          // layer (wrapping axes split a run in two).
+          std::uint32_t run_begin[18 * kElementKinds], run_end[18 * kElementKinds];
           int n_runs = 0;
           std::size_t candidates = 0;
-          for (int a = 0; a < rz.count; ++a)
-            for (long z = rz.first[a]; z <= rz.last[a]; ++z)
-              for (int b = 0; b < ry.count; ++b)
-                for (long y = ry.first[b]; y <= ry.last[b]; ++y) {
-                  const long base = nx * (y + ny * z);
-                  for (int e = 0; e < rx.count; ++e) {
-                    const std::uint32_t kb = cell_start_[base + rx.first[e]],
-                                        ke = cell_start_[base + rx.last[e] + 1];
-                    if (kb == ke) continue;
-                    run_begin[n_runs] = kb;
-                    run_end[n_runs++] = ke;
-                    candidates += ke - kb;
+          const int* partner = partners[static_cast<int>(el.kind[i])];
+          for (int p = 0; p < kElementKinds && partner[p] >= 0; ++p)
+            for (int a = 0; a < rz.count; ++a)
+              for (long z = rz.first[a]; z <= rz.last[a]; ++z)
+                for (int b = 0; b < ry.count; ++b)
+                  for (long y = ry.first[b]; y <= ry.last[b]; ++y) {
+                    const long base = partner[p] * nc_grid + nx * (y + ny * z);
+                    for (int e = 0; e < rx.count; ++e) {
+                      const std::uint32_t kb = cell_start_[base + rx.first[e]],
+                                          ke = cell_start_[base + rx.last[e] + 1];
+                      if (kb == ke) continue;
+                      run_begin[n_runs] = kb;
+                      run_end[n_runs++] = ke;
+                      candidates += ke - kb;
+                    }
                   }
-                }
           // Room for every candidate and a vector more, so the scan can store before it counts.
           const std::size_t room = used + candidates + cell_scan::kPad;
           if (out.size() < room) out.resize(std::max(2 * out.size(), room));
@@ -323,12 +348,10 @@ void NeighborList::build(const Elements& el) {
           probe.i = static_cast<std::uint32_t>(i);
           std::uint32_t* const first = out.data() + used;
           std::uint32_t* o = cell_scan::scan(cells, probe, run_begin, run_end, n_runs, first);
-          if (!all_kinds || exclusion) {  // one pass over the pairs within range
+          if (exclusion) {  // one pass over the pairs within range (of partner kinds only)
             std::uint32_t* w = first;
             for (std::uint32_t* r = first; r != o; ++r)
-              if ((all_kinds || kinds_.has(el.kind[i], el.kind[*r])) &&
-                  !(exclusion && (*exclusion)(el, i, *r)))
-                *w++ = *r;
+              if (!(*exclusion)(el, i, *r)) *w++ = *r;
             o = w;
           }
           // Insertion sort: a few to a few dozen entries, in ascending runs (one per cell).
