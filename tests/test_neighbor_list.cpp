@@ -18,6 +18,7 @@
 #include "hwy/targets.h"
 #include "mdem/core/cnt.h"
 #include "mdem/force/bond/parallel_bond.h"
+#include "mdem/io/state_io.h"
 #include "mdem/neighbor/neighbor_list.h"
 #include "mdem/scene/film_builder.h"
 #include "mdem/scene/tube_builder.h"
@@ -433,6 +434,72 @@ TEST(NeighborList, NeedsRebuildFollowsHalfTheSkin) {
   nl.build(el);
   el.x[7].y() = std::numeric_limits<double>::quiet_NaN();
   EXPECT_TRUE(nl.needs_rebuild(el));
+}
+
+// A sub-list checks only the elements that can change it: none when no two elements can form
+// one of its kind pairs, only its kinds' elements when they are few. The Verlet guarantee holds
+// all the same (compared with a fresh build), and a list restored from a checkpoint decides as
+// the one that was saved.
+TEST(NeighborList, SubListsCheckOnlyTheElementsOfTheirKinds) {
+  const ElementKind C = ElementKind::CntSegment, N = ElementKind::Nanoparticle;
+  Elements el = cloud(uniform_box(3000, Vec3(0, 0, 0), Vec3(30, 30, 30), 31));
+  auto pairs_of = [](const NeighborList& l, const Elements& e) { return listed(l, e.size()); };
+  auto fresh = [](KindPairs k, const Elements& e) {
+    NeighborList l(kCutoff, kSkin);
+    l.set_kinds(k);
+    l.build(e);
+    return l;
+  };
+
+  // NP-CNT without NPs: empty, and no motion of the segments asks for a rebuild.
+  NeighborList np_cnt(kCutoff, kSkin);
+  np_cnt.set_kinds(KindPairs::of(N, C));
+  np_cnt.build(el);
+  EXPECT_EQ(np_cnt.pair_count(), 0u);
+  for (Vec3& x : el.x) x += Vec3(3, -2, 1);
+  EXPECT_FALSE(np_cnt.needs_rebuild(el));
+  EXPECT_LT(np_cnt.max_displacement(el), 4.0);  // the displacement itself is still measured
+  EXPECT_GT(np_cnt.max_displacement(el), 3.0);
+  // One NP added (the count changes): rebuilt, it lists pairs, and segments count again.
+  el.add(cnt_segment(Vec3(15, 15, 15), Quat::Identity(), -1, -1));
+  el.kind.back() = N;
+  EXPECT_TRUE(np_cnt.needs_rebuild(el));
+  np_cnt.build(el);
+  EXPECT_GT(np_cnt.pair_count(), 0u);
+  el.x[10].x() += 0.3;
+  EXPECT_TRUE(np_cnt.needs_rebuild(el));
+  np_cnt.build(el);
+
+  // NP-NP with 40 NPs among 3000 segments: a segment's motion does not count, an NP's does.
+  for (std::size_t i = 0; i < el.size(); i += 75) el.kind[i] = N;
+  NeighborList np_np(kCutoff, kSkin);
+  np_np.set_kinds(KindPairs::of(N, N));
+  np_np.build(el);
+  EXPECT_GT(np_np.pair_count(), 0u);
+  el.x[1].x() += 5.0;  // a segment
+  EXPECT_FALSE(np_np.needs_rebuild(el));
+  EXPECT_TRUE(pairs_of(np_np, el) == pairs_of(fresh(KindPairs::of(N, N), el), el));
+  el.x[150].y() += 0.26;  // an NP
+  EXPECT_TRUE(np_np.needs_rebuild(el));
+  el.x[150].y() -= 0.26;
+  el.x[225].z() = std::numeric_limits<double>::quiet_NaN();  // a NaN NP asks for a rebuild
+  EXPECT_TRUE(np_np.needs_rebuild(el));
+  el.x[225].z() = 1.0;
+
+  // Restored from a checkpoint: the same decisions.
+  np_np.build(el);
+  StateWriter w;
+  np_np.save_state(w);
+  NeighborList restored(kCutoff, kSkin);
+  restored.set_kinds(KindPairs::of(N, N));
+  StateReader r(w.bytes());
+  restored.load_state(r, el.size());
+  el.x[2].x() += 5.0;  // a segment
+  EXPECT_FALSE(np_np.needs_rebuild(el));
+  EXPECT_FALSE(restored.needs_rebuild(el));
+  el.x[300].x() += 0.3;  // an NP
+  EXPECT_TRUE(np_np.needs_rebuild(el));
+  EXPECT_TRUE(restored.needs_rebuild(el));
 }
 
 TEST(NeighborList, NeedsRebuildInTheThreadedPath) {

@@ -264,7 +264,9 @@ TEST(PairTable, ADashpotWithoutItsContactListsItsOwnPairs) {
                           return el.cnt_pair_excluded(i, j, 20);
                         }));
   for (std::size_t i = 0; i < el.size(); ++i)
-    if (el.kind[i] == ElementKind::Nanoparticle) EXPECT_EQ(sys.damping_forces()[i].norm(), 0.0);
+    if (el.kind[i] == ElementKind::Nanoparticle) {
+      EXPECT_EQ(sys.damping_forces()[i].norm(), 0.0);
+    }
 }
 
 // A dashpot added before its contact still shares the contact's list (one entry, one build per

@@ -369,7 +369,9 @@ TEST(Stability, TimeStepBeyondTheCriticalStepWithTheCheckOff) {
     const std::string name = "twist, dt = " + fmt(f) + " x critical, check off (job runner)";
     const bool failed = r.outcome.state == v1::FAILED;
     stopped = stopped || failed;
-    if (!failed) EXPECT_LT(r.balance, 0.5);  // not stopped: within the guard's tolerance
+    if (!failed) {
+      EXPECT_LT(r.balance, 0.5);  // not stopped: within the guard's tolerance
+    }
     note_outcome(
         name, failed, r.outcome.reason, [&] { return "balance error " + fmt(r.balance); },
         since(t0));

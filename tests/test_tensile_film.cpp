@@ -400,7 +400,9 @@ TEST(TensileFilm, PrerelaxationRemovesOverlapsAndSaysWhy) {
   EXPECT_GE(npc, 0.8);
   EXPECT_GE(npnp, 0.1);
   EXPECT_NEAR(cc, crit->last().min_cnt_cnt, 1e-12);
-  if (met) EXPECT_LT(crit->last().max_speed, 0.05);
+  if (met) {
+    EXPECT_LT(crit->last().max_speed, 0.05);
+  }
 
   // Then: motion zeroed, clock and ledger restarted.
   zero_motion(sys.elements());

@@ -69,9 +69,56 @@ double NeighborList::max_displacement(const Elements& el) const {
   return std::sqrt(m2);
 }
 
+void NeighborList::plan_check(const Elements& el) const {
+  check_idx_.clear();
+  check_scope_ = CheckScope::All;
+  if (kinds_.is_all()) return;
+  std::size_t count[kElementKinds] = {};
+  for (const ElementKind k : el.kind) ++count[static_cast<int>(k)];
+  bool possible = false;
+  std::size_t involved = 0;
+  for (int a = 0; a < kElementKinds; ++a) {
+    const auto ka = static_cast<ElementKind>(a);
+    if (kinds_.involves(ka)) involved += count[a];
+    for (int b = a; b < kElementKinds; ++b)
+      if (kinds_.has(ka, static_cast<ElementKind>(b)) && count[a] > 0 && count[b] > (a == b))
+        possible = true;
+  }
+  if (!possible) {
+    check_scope_ = CheckScope::None;
+  } else if (involved <= el.size() / 4) {
+    check_scope_ = CheckScope::Listed;
+    check_idx_.reserve(involved);
+    for (std::size_t i = 0; i < el.size(); ++i)
+      if (kinds_.involves(el.kind[i])) check_idx_.push_back(static_cast<std::uint32_t>(i));
+  }
+}
+
 bool NeighborList::needs_rebuild(const Elements& el) const {
   if (builds_ == 0 || el.size() != x_at_build_.size()) return true;
-  // Written so that a NaN displacement asks for a rebuild (which then reports the element).
+  if (!check_planned_) {  // after load_state: the same plan as the build made
+    plan_check(el);
+    check_planned_ = true;
+  }
+  // Only the elements of the listed kinds can change the list: none when no two of them can pair
+  // (an NP-CNT list without NPs), few for a list of a rare kind (NP-NP). Written so that a NaN
+  // displacement asks for a rebuild (which then reports the element).
+  switch (check_scope_) {
+    case CheckScope::None:
+      return false;
+    case CheckScope::Listed: {
+      double m2 = 0.0;
+      for (const std::uint32_t i : check_idx_) {
+        double d2 = (el.x[i] - x_at_build_[i]).squaredNorm();
+        if (!(d2 <= std::numeric_limits<double>::max()))
+          d2 = std::numeric_limits<double>::infinity();
+        m2 = std::max(m2, d2);
+      }
+      return !(std::sqrt(m2) <= 0.5 * skin_);
+    }
+    case CheckScope::All:
+      break;
+  }
   return !(max_displacement(el) <= 0.5 * skin_);
 }
 
@@ -416,7 +463,8 @@ void NeighborList::build(const Elements& el) {
     builds_ = 0;  // the list is not usable
     throw std::runtime_error(error);
   }
-
+  plan_check(el);
+  check_planned_ = true;
   ++builds_;
 }
 
@@ -454,14 +502,11 @@ void NeighborList::load_state(StateReader& r, std::size_t n) {
                "entry " + std::to_string(k) + " is not an element after " + std::to_string(i));
   }
   builds_ = static_cast<std::size_t>(builds);
+  check_planned_ = false;  // planned from the elements at the next check
   x_at_build_ = std::move(x);
   offsets_ = std::move(offsets);
   neighbors_ = std::move(neighbors);
 }
-
-}  // namespace mdem
-
-namespace mdem {
 
 const char* neighbor_scan_target() { return cell_scan::target_name(); }
 
@@ -470,7 +515,8 @@ std::size_t NeighborList::memory_bytes() const {
          capacity_bytes(cell_of_) + capacity_bytes(cell_start_) + capacity_bytes(cell_elem_) +
          capacity_bytes(cell_px_) + capacity_bytes(cell_py_) + capacity_bytes(cell_pz_) +
          capacity_bytes(cell_count_) + capacity_bytes(range_sum_) +
-         capacity_bytes(thread_neighbors_) + capacity_bytes(chunk_pos_);
+         capacity_bytes(thread_neighbors_) + capacity_bytes(chunk_pos_) +
+         capacity_bytes(check_idx_);
 }
 
 }  // namespace mdem

@@ -38,7 +38,10 @@ class NeighborList {
   using Exclusion = std::function<bool(const Elements&, std::size_t, std::size_t)>;
   void set_exclusion(Exclusion ex) { exclusion_ = std::move(ex); }
 
-  // True when the list must be rebuilt before it can be trusted for el's current positions.
+  // True when the list must be rebuilt before it can be trusted for el's current positions: some
+  // element of a listed kind moved more than half the skin since the build (a list whose kinds
+  // no two elements can form, e.g. NP-CNT without NPs, stays empty and never needs one while the
+  // element count holds; element kinds never change).
   bool needs_rebuild(const Elements& el) const;
   // The list no longer matches the elements (they were reordered): needs_rebuild is true until
   // the next build.
@@ -83,7 +86,18 @@ class NeighborList {
   std::vector<std::vector<std::uint32_t>> cell_count_;  // per thread: its elements per cell
   std::vector<std::size_t> range_sum_;  // per thread's range: its cells' elements, rows' pairs
   std::vector<std::vector<std::uint32_t>> thread_neighbors_;  // per-thread output
-  std::vector<std::size_t> chunk_pos_;  // where each chunk of elements starts in its thread's
+  std::vector<std::size_t>
+      chunk_pos_;  // where each chunk of elements starts in its thread's output
+
+  // Which elements needs_rebuild checks: all; those of the listed kinds (check_idx_, ascending)
+  // when they are at most a quarter of all; none when no two elements can form a listed pair.
+  // Planned from the elements' kinds at each build, and at the first check after load_state, so
+  // a resumed run rebuilds at the same steps.
+  enum class CheckScope { All, Listed, None };
+  void plan_check(const Elements& el) const;
+  mutable CheckScope check_scope_ = CheckScope::All;
+  mutable bool check_planned_ = false;
+  mutable std::vector<std::uint32_t> check_idx_;
 };
 
 // The instruction set the build's candidate test runs on, chosen at run time (Google Highway's
