@@ -215,7 +215,7 @@ void NeighborList::build(const Elements& el) {
   // by thread, so in element order, the starts found by a scan over the cells in ranges (each
   // thread's range summed, the ranges' sums added in order, each range scanned from its base); each
   // thread then places its own elements. The result is the serial sort's, whatever the thread count
-  // (it was serial: a quarter of a 2-thread build on the dense film).
+  // (it was serial; on the team alone it made a 2-thread film build 6 % faster).
   constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   cell_of_.resize(n);
   const std::size_t n_keys = static_cast<std::size_t>(layers) * n_cells;
