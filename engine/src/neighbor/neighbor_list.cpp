@@ -41,6 +41,13 @@ constexpr long kReach = 1;
   throw std::runtime_error(m.str());
 }
 
+// |x − x0|², infinite when not finite, so that a NaN position asks for a rebuild (std::max keeps
+// its first argument against a NaN).
+inline double moved2(const Vec3& x, const Vec3& x0) {
+  const double d2 = (x - x0).squaredNorm();
+  return d2 <= std::numeric_limits<double>::max() ? d2 : std::numeric_limits<double>::infinity();
+}
+
 }  // namespace
 
 NeighborList::NeighborList(double cutoff, double skin, Domain domain)
@@ -62,9 +69,7 @@ double NeighborList::max_displacement(const Elements& el) const {
   const long nl = static_cast<long>(n);
 #pragma omp parallel for schedule(static) reduction(max : m2) if (n >= kParallelMin)
   for (long i = 0; i < nl; ++i) {
-    double d2 = (x[i] - x0[i]).squaredNorm();
-    if (!(d2 <= std::numeric_limits<double>::max())) d2 = std::numeric_limits<double>::infinity();
-    m2 = std::max(m2, d2);
+    m2 = std::max(m2, moved2(x[i], x0[i]));
   }
   return std::sqrt(m2);
 }
@@ -96,7 +101,7 @@ void NeighborList::plan_check(const Elements& el) const {
 
 bool NeighborList::needs_rebuild(const Elements& el) const {
   if (builds_ == 0 || el.size() != x_at_build_.size()) return true;
-  if (!check_planned_) {  // after load_state: the same plan as the build made
+  if (!check_planned_) {  // the first check since a build or a load_state
     plan_check(el);
     check_planned_ = true;
   }
@@ -108,12 +113,7 @@ bool NeighborList::needs_rebuild(const Elements& el) const {
       return false;
     case CheckScope::Listed: {
       double m2 = 0.0;
-      for (const std::uint32_t i : check_idx_) {
-        double d2 = (el.x[i] - x_at_build_[i]).squaredNorm();
-        if (!(d2 <= std::numeric_limits<double>::max()))
-          d2 = std::numeric_limits<double>::infinity();
-        m2 = std::max(m2, d2);
-      }
+      for (const std::uint32_t i : check_idx_) m2 = std::max(m2, moved2(el.x[i], x_at_build_[i]));
       return !(std::sqrt(m2) <= 0.5 * skin_);
     }
     case CheckScope::All:
@@ -463,8 +463,7 @@ void NeighborList::build(const Elements& el) {
     builds_ = 0;  // the list is not usable
     throw std::runtime_error(error);
   }
-  plan_check(el);
-  check_planned_ = true;
+  check_planned_ = false;  // planned at the next check
   ++builds_;
 }
 

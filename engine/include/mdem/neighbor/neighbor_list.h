@@ -86,13 +86,12 @@ class NeighborList {
   std::vector<std::vector<std::uint32_t>> cell_count_;  // per thread: its elements per cell
   std::vector<std::size_t> range_sum_;  // per thread's range: its cells' elements, rows' pairs
   std::vector<std::vector<std::uint32_t>> thread_neighbors_;  // per-thread output
-  std::vector<std::size_t>
-      chunk_pos_;  // where each chunk of elements starts in its thread's output
+  std::vector<std::size_t> chunk_pos_;  // each chunk's start in its thread's output
 
   // Which elements needs_rebuild checks: all; those of the listed kinds (check_idx_, ascending)
   // when they are at most a quarter of all; none when no two elements can form a listed pair.
-  // Planned from the elements' kinds at each build, and at the first check after load_state, so
-  // a resumed run rebuilds at the same steps.
+  // Planned from the elements' kinds at the first check after a build or a load_state, so a
+  // resumed run rebuilds at the same steps.
   enum class CheckScope { All, Listed, None };
   void plan_check(const Elements& el) const;
   mutable CheckScope check_scope_ = CheckScope::All;
