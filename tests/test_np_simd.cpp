@@ -379,3 +379,41 @@ TEST(NpDashpotFused, SystemForcesEqualTwoPassesInEitherOrder) {
 }
 
 }  // namespace
+
+// Elements::axis (the NP–CNT law's segment axis) is written out in scalars; it must stay Eigen's
+// q * UnitX bit for bit (so the NP–CNT forces did not change; to round-off in a build with fused
+// multiply-adds), on unit, nearly unit and signed-zero quaternions. Independent check: a unit
+// quaternion's rotation matrix's first column, to round-off.
+TEST(ElementsAxis, IsEigensRotationOfUnitX) {
+  std::mt19937_64 rng(29);
+  std::normal_distribution<double> g;
+  Elements el;
+  std::vector<Quat> qs = {Quat::Identity(), Quat(0, 1, 0, 0),          Quat(0, 0, 1, 0),
+                          Quat(0, 0, 0, 1), Quat(-0.0, -0.0, 1, -0.0), Quat(-1, 0, 0, 0)};
+  for (int k = 0; k < 4000; ++k) {
+    Quat q(g(rng), g(rng), g(rng), g(rng));
+    q.normalize();
+    if (k % 2 == 1) q.coeffs() *= 1 + 1e-9 * g(rng);  // a little off the unit sphere, as q drifts
+    qs.push_back(q);
+  }
+  for (const Quat& q : qs) {
+    ElementInit e;
+    e.q = q;
+    e.mass = 1;
+    e.inertia = Vec3::Ones();
+    e.radius = 1;
+    el.add(e);
+  }
+  for (std::size_t i = 0; i < qs.size(); ++i) {
+    el.q[i] = qs[i];  // (add() normalises)
+    const Vec3 eigen = qs[i] * Vec3::UnitX();
+    const Vec3 a = el.axis(i);
+#ifndef __FMA__
+    EXPECT_EQ(a, eigen) << "quaternion " << i;
+#else  // (a native build may contract the two forms into fused multiply-adds differently)
+    EXPECT_LT((a - eigen).norm(), 1e-15 * qs[i].squaredNorm()) << "quaternion " << i;
+#endif
+    if (std::abs(qs[i].norm() - 1) < 1e-15)
+      EXPECT_LT((a - qs[i].toRotationMatrix().col(0)).norm(), 1e-14) << "quaternion " << i;
+  }
+}
