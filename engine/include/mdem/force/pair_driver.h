@@ -310,6 +310,7 @@ void run_batched(const K& k, const Elements& el, const NeighborList& list, Force
     const auto [first, last] = balanced_rows(list.offsets(), tid, omp_get_num_threads());
     for (long i = first; i < last; ++i) {
       const std::uint32_t begin = off[i], end = off[i + 1];
+      if (begin == end) continue;  // (a sub-list of few kinds: most rows are empty)
       const Vec3 xi = x[i];
       for (std::uint32_t m = begin; m < end; ++m) {
         const std::uint32_t j = nb[m];
@@ -366,6 +367,8 @@ void drive_pairs(const K& k, const Elements& el, const NeighborList& list, Force
                            ": neighbour list was not built for these elements");
   if (K::kDissipative && !sink.has_damping())
     throw std::logic_error(std::string(k.name()) + ": force sink has no damping buffers");
+  // No pairs, nothing to add: not a pass over every row (an NP sub-list of a film without NPs).
+  if (list.pair_count() == 0) return;
   if constexpr (requires { k.begin(el); }) k.begin(el);
   // The pair loop is heavy: worth a team from a few thousand listed pairs on.
   const bool threaded = static_cast<long>(list.pair_count()) >= 2 * kParallelMinItems;
@@ -399,6 +402,7 @@ void drive_pairs_fused(const K& k, const C& c, const Elements& el, const Neighbo
   if (!k.batched() || !c.batched() || k.cutoff() != c.cutoff())
     throw std::logic_error(std::string(k.name()) + " and " + std::string(c.name()) +
                            ": a fused pass needs two batched kernels with one cutoff");
+  if (list.pair_count() == 0) return;
   if constexpr (requires { k.begin(el); }) k.begin(el);
   if constexpr (requires { c.begin(el); }) c.begin(el);
   const bool threaded = static_cast<long>(list.pair_count()) >= 2 * kParallelMinItems;
