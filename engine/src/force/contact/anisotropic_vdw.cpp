@@ -49,12 +49,6 @@ namespace {
 
 constexpr double kCoincident2 = 1e-24;  // R² below which the centres count as coincident (nm²)
 
-// Axis of a CNT segment: body x in the world frame (first column of the rotation matrix).
-inline Vec3 axis_of(const Quat& q) {
-  const double w = q.w(), x = q.x(), y = q.y(), z = q.z();
-  return Vec3(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y));
-}
-
 // V(D) and V'(D) on the Lennard-Jones-like branch.
 inline void lj(const VdwConstants& k, double d, double& v, double& dv) {
   const VdwParams& p = k.p;
@@ -529,7 +523,7 @@ void vdw_pairs_batched(const VdwConstants& k, std::span<const Vec3> r, std::span
 
 const char* vdw_simd_target() { return vdw_simd::target_name(); }
 
-void VdwKernel::prepare(const Elements& el, long i) const { axes_[i] = axis_of(el.q[i]); }
+void VdwKernel::prepare(const Elements& el, long i) const { axes_[i] = el.axis(i); }
 
 void VdwKernel::batch(const Elements&, PairBatch& b) const { evaluate_batch(k_, axes_.data(), b); }
 
@@ -540,7 +534,7 @@ bool VdwKernel::pair(const Elements&, std::size_t i, std::size_t j, const Vec3& 
 
 void VdwKernel::stiffness(const Elements& el, std::size_t i, std::size_t j, const Vec3& d,
                           StiffnessSums& s) const {
-  const PairStiffness k = pair_stiffness(k_, d, axis_of(el.q[i]), axis_of(el.q[j]));
+  const PairStiffness k = pair_stiffness(k_, d, el.axis(i), el.axis(j));
   if (k.kt <= 0.0) return;
   // Translation-rotation coupling: the contact's force at a lever arm of about one radius.
   s.add_pair(i, j, k.kt, k.kr, k.kt * p_.radius);
