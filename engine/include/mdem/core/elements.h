@@ -103,7 +103,8 @@ struct Elements {
 
   // Axis of a CNT segment (body x in world frame): q[i] * Vec3::UnitX(), which Eigen evaluates
   // as toRotationMatrix() times (1, 0, 0), written out in scalars as its first column (the same
-  // doubles: the product's R(k,1)·0 and R(k,2)·0 terms change at most the sign of a zero).
+  // doubles in the portable build: the product's R(k,1)·0 and R(k,2)·0 terms change at most the
+  // sign of a zero; with -march=native the compiler may fuse either form's multiply-adds).
   // Through Eigen, GCC stored the matrix's entries one by one and loaded them back in pairs, which
   // the store buffer cannot forward: 45 % of the NP–CNT batch's time went to those stalls.
   Vec3 axis(std::size_t i) const {
