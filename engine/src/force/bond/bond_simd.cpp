@@ -102,10 +102,23 @@ HWY_INLINE std::uint64_t lanes(const Rest& r, const Bodies& b, std::size_t k, st
   auto field = [&](int f) { return hn::LoadU(d, rest + f * kMaxLanes); };
   const std::int64_t* index = r.index + 2 * block * kMaxLanes + lane;
   const VI ii = hn::LoadU(di, index), jj = hn::LoadU(di, index + kMaxLanes);
-  const V3 xi = gather_x(d, b.x, ii + hn::ShiftLeft<1>(ii));
-  V3 xj = gather_x(d, b.x, jj + hn::ShiftLeft<1>(jj));
-  const Q qi = gather_q(d, b.q, hn::ShiftLeft<2>(ii));
-  const Q qj = gather_q(d, b.q, hn::ShiftLeft<2>(jj));
+  V3 xi, xj;
+  Q qi, qj;
+  // A vector of one tube's consecutive bonds (i, i + 1), (i + 1, i + 2), ...: its bodies lie
+  // side by side in memory, loaded as such (the same doubles) rather than by 14 gathers.
+  const std::int64_t i0 = hn::GetLane(ii);
+  const VI run = hn::Iota(di, i0);
+  if (hn::AllTrue(di, hn::And(hn::Eq(ii, run), hn::Eq(jj, run + hn::Set(di, 1))))) {
+    hn::LoadInterleaved3(d, b.x + 3 * i0, xi.x, xi.y, xi.z);
+    hn::LoadInterleaved3(d, b.x + 3 * (i0 + 1), xj.x, xj.y, xj.z);
+    hn::LoadInterleaved4(d, b.q + 4 * i0, qi.v.x, qi.v.y, qi.v.z, qi.w);
+    hn::LoadInterleaved4(d, b.q + 4 * (i0 + 1), qj.v.x, qj.v.y, qj.v.z, qj.w);
+  } else {
+    xi = gather_x(d, b.x, ii + hn::ShiftLeft<1>(ii));
+    xj = gather_x(d, b.x, jj + hn::ShiftLeft<1>(jj));
+    qi = gather_q(d, b.q, hn::ShiftLeft<2>(ii));
+    qj = gather_q(d, b.q, hn::ShiftLeft<2>(jj));
+  }
   if (b.periodic) {  // Domain::image: x_j less whole box lengths (0 on open axes)
     xj.x = xj.x - hn::Set(d, b.length[0]) * hn::Round((xj.x - xi.x) * hn::Set(d, b.inv_length[0]));
     xj.y = xj.y - hn::Set(d, b.length[1]) * hn::Round((xj.y - xi.y) * hn::Set(d, b.inv_length[1]));
