@@ -108,18 +108,16 @@ bool NeighborList::needs_rebuild(const Elements& el) const {
   // Only the elements of the listed kinds can change the list: none when no two of them can pair
   // (an NP-CNT list without NPs), few for a list of a rare kind (NP-NP). Written so that a NaN
   // displacement asks for a rebuild (which then reports the element).
-  switch (check_scope_) {
-    case CheckScope::None:
-      return false;
-    case CheckScope::Listed: {
-      double m2 = 0.0;
-      for (const std::uint32_t i : check_idx_) m2 = std::max(m2, moved2(el.x[i], x_at_build_[i]));
-      return !(std::sqrt(m2) <= 0.5 * skin_);
-    }
-    case CheckScope::All:
-      break;
+  if (check_scope_ == CheckScope::None) return false;
+  double moved = 0.0;
+  if (check_scope_ == CheckScope::Listed) {
+    for (const std::uint32_t i : check_idx_)
+      moved = std::max(moved, moved2(el.x[i], x_at_build_[i]));
+    moved = std::sqrt(moved);
+  } else {
+    moved = max_displacement(el);
   }
-  return !(max_displacement(el) <= 0.5 * skin_);
+  return !(moved <= 0.5 * skin_);
 }
 
 void NeighborList::build(const Elements& el) {
