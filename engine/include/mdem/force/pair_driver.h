@@ -125,20 +125,35 @@ inline Vec3* torque_buffer(ForceSink& sink, int tid) {
     return K::kDissipative ? sink.damping_torque(tid) : sink.torque(tid);
 }
 
+// The rows that hold pairs, [first non-empty, last non-empty + 1), from the row offsets `off` by
+// two binary searches; an empty range (first == second) for a list without pairs. A sub-list of
+// a rare kind (NP-NP, NP-CNT under its NPs) has its rows at the end of the element order, after
+// ~10^5 empty rows of segments that a pass need not walk.
+inline std::pair<long, long> listed_rows(const std::vector<std::uint32_t>& off) {
+  if (off.size() < 2 || off.back() == 0) return {0, 0};
+  const long first = (std::upper_bound(off.begin(), off.end(), 0u) - off.begin()) - 1;
+  const long last = std::lower_bound(off.begin(), off.end(), off.back()) - off.begin();
+  return {first, last};
+}
+
 // Thread tid's rows [first, second) of a list with row offsets `off`: contiguous, so each thread
 // works on its part of the scene (its f_j, t_j mostly its own cache lines), and cut where the
 // listed pairs (plus a quarter pair per row, the row's own cost) split evenly, so the threads
 // finish together (64-row chunks dealt round robin left the busier thread 4 % more instructions
-// on the dense film). Depends on the list and the team size only: the sums stay deterministic.
+// on the dense film). Only the rows from the first to the last that hold pairs (listed_rows) are
+// dealt. Depends on the list and the team size only: the sums stay deterministic.
 inline std::pair<long, long> balanced_rows(const std::vector<std::uint32_t>& off, int tid,
                                            int threads) {
-  const long n = static_cast<long>(off.size()) - 1;
-  const auto cost = [&](long i) { return 4 * static_cast<std::uint64_t>(off[i]) + i; };
+  const auto [r0, r1] = listed_rows(off);
+  const auto cost = [&](long i) {
+    return 4 * static_cast<std::uint64_t>(off[i]) + static_cast<std::uint64_t>(i - r0);
+  };
   const auto cut = [&](int t) -> long {
-    if (t <= 0) return 0;
-    if (t >= threads) return n;
-    const std::uint64_t target = cost(n) * static_cast<std::uint64_t>(t) / threads;
-    long lo = 0, hi = n;  // the first row i with cost(i) >= target
+    if (t <= 0) return r0;
+    if (t >= threads) return r1;
+    const std::uint64_t target =
+        (cost(r1) - cost(r0)) * static_cast<std::uint64_t>(t) / threads + cost(r0);
+    long lo = r0, hi = r1;  // the first row i with cost(i) >= target
     while (lo < hi) {
       const long mid = lo + (hi - lo) / 2;
       if (cost(mid) < target)
