@@ -60,9 +60,13 @@ std::vector<Pair> brute_force(const Elements& el, double range,
   return out;
 }
 
-// The list's pairs, checking the CSR layout on the way: offsets start at 0, are monotone, end at
-// pair_count(), and each i's neighbours are > i and strictly ascending.
-std::vector<Pair> listed(const NeighborList& nl, std::size_t n) {
+// The list's pairs as (lower index, higher index), sorted, checking the CSR layout on the way:
+// offsets start at 0, are monotone, end at pair_count(); each i's neighbours are strictly
+// ascending, > i when of i's kind or in a list of all kinds, and a pair of two kinds in a list of
+// some kinds is in the row of the kind with fewer elements in el (ties: the lower kind),
+// whatever the indices.
+std::vector<Pair> listed(const NeighborList& nl, const Elements& el) {
+  const std::size_t n = el.size();
   const auto& off = nl.offsets();
   const auto& nb = nl.neighbors();
   EXPECT_EQ(off.size(), n + 1);
@@ -70,17 +74,30 @@ std::vector<Pair> listed(const NeighborList& nl, std::size_t n) {
   EXPECT_EQ(off[0], 0u);
   EXPECT_EQ(off[n], nb.size());
   EXPECT_EQ(nl.pair_count(), nb.size());
+  std::size_t count[kElementKinds] = {};
+  for (const ElementKind k : el.kind) ++count[static_cast<int>(k)];
   std::vector<Pair> out;
   for (std::size_t i = 0; i < n; ++i) {
     EXPECT_LE(off[i], off[i + 1]);
     for (std::uint32_t m = off[i]; m < off[i + 1]; ++m) {
-      EXPECT_GT(nb[m], i) << "neighbour of " << i;
-      if (m > off[i]) {
-        EXPECT_LT(nb[m - 1], nb[m]) << "neighbours of " << i << " not ascending";
+      const std::uint32_t j = nb[m];
+      const int a = static_cast<int>(el.kind[i]), b = static_cast<int>(el.kind[j]);
+      if (a == b || nl.kinds().is_all()) {
+        EXPECT_GT(j, i) << "neighbour of " << i;
+      } else {
+        EXPECT_NE(j, i);
+        EXPECT_TRUE(count[a] != count[b] ? count[a] < count[b] : a < b)
+            << "pair (" << i << ", " << j << ") of kinds " << a << ", " << b
+            << " in the row of the kind with more elements";
       }
-      out.emplace_back(static_cast<std::uint32_t>(i), nb[m]);
+      if (m > off[i]) {
+        EXPECT_LT(nb[m - 1], j) << "neighbours of " << i << " not ascending";
+      }
+      out.emplace_back(static_cast<std::uint32_t>(std::min<std::size_t>(i, j)),
+                       static_cast<std::uint32_t>(std::max<std::size_t>(i, j)));
     }
   }
+  std::sort(out.begin(), out.end());
   return out;
 }
 
@@ -89,7 +106,7 @@ void expect_matches_brute_force(const Elements& el, const NeighborList::Exclusio
   NeighborList nl(cutoff, skin);
   if (ex) nl.set_exclusion(ex);
   nl.build(el);
-  const std::vector<Pair> got = listed(nl, el.size());
+  const std::vector<Pair> got = listed(nl, el);
   const std::vector<Pair> want = brute_force(el, cutoff + skin, ex);
   ASSERT_EQ(got.size(), want.size());
   EXPECT_TRUE(got == want);
@@ -301,7 +318,7 @@ TEST(NeighborList, KindSubListsListTheBruteForcePairsOfTheirKinds) {
             nl.set_kinds(k);
             if (excluding) nl.set_exclusion(odd_sum);
             nl.build(el);
-            const std::vector<Pair> got = listed(nl, el.size());
+            const std::vector<Pair> got = listed(nl, el);
             EXPECT_EQ(got.size(), want.size());
             EXPECT_TRUE(got == want);
           }
@@ -373,7 +390,7 @@ TEST(NeighborList, SameResultForAnyThreadCount) {
   NeighborList nl(kCutoff, kSkin);
   nl.set_exclusion(same_tube_close);
   nl.build(el);
-  const std::vector<Pair> got = listed(nl, el.size());
+  const std::vector<Pair> got = listed(nl, el);
   EXPECT_TRUE(got == brute_force(el, kCutoff + kSkin, same_tube_close));
 }
 
@@ -385,7 +402,7 @@ TEST(NeighborList, RebuildReusesAndStaysCorrectAfterMoves) {
   std::mt19937_64 rng(11);
   for (int round = 0; round < 4; ++round) {
     nl.build(el);
-    EXPECT_TRUE(listed(nl, el.size()) == brute_force(el, kCutoff + kSkin));
+    EXPECT_TRUE(listed(nl, el) == brute_force(el, kCutoff + kSkin));
     for (Vec3& x : el.x)
       x += Vec3(unit_interval(rng()) - 0.5, unit_interval(rng()) - 0.5, unit_interval(rng()) - 0.5);
   }
@@ -414,7 +431,7 @@ TEST(NeighborList, NeedsRebuildFollowsHalfTheSkin) {
   }
   EXPECT_LT(nl.max_displacement(el), kSkin / 2);
   EXPECT_FALSE(nl.needs_rebuild(el));
-  const std::vector<Pair> list = listed(nl, el.size());
+  const std::vector<Pair> list = listed(nl, el);
   const std::set<Pair> in_list(list.begin(), list.end());
   for (const Pair& p : brute_force(el, kCutoff))
     EXPECT_TRUE(in_list.count(p)) << "pair (" << p.first << ", " << p.second << ") lost";
@@ -443,7 +460,7 @@ TEST(NeighborList, NeedsRebuildFollowsHalfTheSkin) {
 TEST(NeighborList, SubListsCheckOnlyTheElementsOfTheirKinds) {
   const ElementKind C = ElementKind::CntSegment, N = ElementKind::Nanoparticle;
   Elements el = cloud(uniform_box(3000, Vec3(0, 0, 0), Vec3(30, 30, 30), 31));
-  auto pairs_of = [](const NeighborList& l, const Elements& e) { return listed(l, e.size()); };
+  auto pairs_of = [](const NeighborList& l, const Elements& e) { return listed(l, e); };
   auto fresh = [](KindPairs k, const Elements& e) {
     NeighborList l(kCutoff, kSkin);
     l.set_kinds(k);
@@ -500,6 +517,45 @@ TEST(NeighborList, SubListsCheckOnlyTheElementsOfTheirKinds) {
   el.x[300].x() += 0.3;  // an NP
   EXPECT_TRUE(np_np.needs_rebuild(el));
   EXPECT_TRUE(restored.needs_rebuild(el));
+}
+
+// A checkpoint's list may hold a neighbour below its row (a pair of two kinds is listed under the
+// rarer kind's element, e.g. an NP after the segments): loaded. An entry naming its own row or an
+// element beyond the system is refused before any pair loop could use it.
+TEST(NeighborList, CheckpointEntriesMustBeOtherElementsOfTheSystem) {
+  const auto saved = [](std::vector<std::uint32_t> offsets, std::vector<std::uint32_t> nb) {
+    StateWriter w;
+    w.begin("neighbor_list");
+    w.put(kCutoff);
+    w.put(kSkin);
+    w.put(std::uint64_t{1});
+    w.put(std::vector<Vec3>(3, Vec3::Zero()));
+    w.put(offsets);
+    w.put(nb);
+    return w.take();
+  };
+  const auto load = [](const std::string& bytes) {
+    NeighborList nl(kCutoff, kSkin);
+    StateReader r(bytes);
+    nl.load_state(r, 3);
+    return nl;
+  };
+  const NeighborList below = load(saved({0, 0, 0, 2}, {0, 1}));  // row 2 lists 0 and 1
+  EXPECT_EQ(below.neighbors(), (std::vector<std::uint32_t>{0, 1}));
+  EXPECT_EQ(below.offsets(), (std::vector<std::uint32_t>{0, 0, 0, 2}));
+  for (const auto& [offsets, nb] :
+       std::vector<std::pair<std::vector<std::uint32_t>, std::vector<std::uint32_t>>>{
+           {{0, 1, 1, 1}, {0}},               // element 0 paired with itself
+           {{0, 0, 1, 1}, {3}},               // an element past the last
+           {{0, 0, 0, 1}, {0xffffffffu}}}) {  // far past it
+    try {
+      load(saved(offsets, nb));
+      ADD_FAILURE() << "entry " << nb[0] << " was loaded";
+    } catch (const CheckpointError& e) {
+      EXPECT_NE(std::string(e.what()).find("not another element of the 3"), std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 TEST(NeighborList, NeedsRebuildInTheThreadedPath) {

@@ -1,7 +1,8 @@
 // The NP kernels in batches against their scalar references. The NP–CNT law (NpCntEvaluation::
 // Scalar): isolated NP–segment pairs covering every branch of the law in both element orders, on
 // every instruction set this CPU runs; a film of tubes and NPs through the pair driver at 1 and 2
-// threads, with the batched sums' determinism and momentum balances. The NP dashpots
+// threads, with the batched sums' determinism and momentum balances, over a list of all kinds
+// (pairs under the segments) and over the NP–CNT sub-list (pairs under the NPs). The NP dashpots
 // (DashpotEvaluation::Scalar) on the same film; the NP–CNT dashpot in one pass with its contact,
 // bit for bit the two passes, in the driver and in a system.
 #include <gtest/gtest.h>
@@ -101,8 +102,13 @@ struct Forces {
   double energy = 0;
 };
 
-NeighborList list_of(const ForceModel& m, const Elements& el, const Domain& domain = Domain{}) {
+// The model's pairs: a list of all kinds with the model's exclusion (each pair under its lower
+// index), or (kind_list) the model's own sub-list as a system builds it (an NP–CNT pair under its
+// NP, the rarer kind).
+NeighborList list_of(const ForceModel& m, const Elements& el, const Domain& domain = Domain{},
+                     bool kind_list = false) {
   NeighborList nl(m.cutoff(), 0.5, domain);
+  if (kind_list) nl.set_kinds(m.kinds());
   nl.set_exclusion(
       [&m](const Elements& e, std::size_t i, std::size_t j) { return m.excludes(e, i, j); });
   nl.set_owner(&m);
@@ -110,9 +116,10 @@ NeighborList list_of(const ForceModel& m, const Elements& el, const Domain& doma
   return nl;
 }
 
-Forces evaluate(const NpCntContact& m, const Elements& el, int threads,
-                const Domain& domain = Domain{}) {
-  const NeighborList nl = list_of(m, el, domain);
+template <class M>
+Forces evaluate(const M& m, const Elements& el, int threads, const Domain& domain = Domain{},
+                bool kind_list = false) {
+  const NeighborList nl = list_of(m, el, domain, kind_list);
   ForceSink sink;
   sink.resize(el.size(), threads, false);
   m.compute(el, &nl, sink);
@@ -239,6 +246,14 @@ void compare_on_film(const Domain& domain) {
       ASSERT_EQ(again.f[i], got.f[i]) << "element " << i;
       ASSERT_EQ(again.t[i], got.t[i]) << "element " << i;
     }
+  }
+  // The NP–CNT sub-list holds the pairs under the NPs (after the segments in index order), the
+  // list of all kinds under the segments: the same forces to round-off.
+  for (int threads : {1, 2}) {
+    const Forces ref = evaluate(scalar, el, threads, domain);
+    const Forces got = evaluate(batched, el, threads, domain, true);
+    EXPECT_LT(relative_difference(ref, got), kRoundOff) << threads << " threads, NP rows";
+    EXPECT_NEAR(got.energy, ref.energy, kRoundOff * std::abs(ref.energy));
   }
   // Newton's third law and the balance of angular momentum hold for the batched sums.
   const Forces got = evaluate(batched, el, 2, domain);

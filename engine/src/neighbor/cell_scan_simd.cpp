@@ -22,7 +22,7 @@ HWY_INLINE V minimum_image(V d, V length, V inv_length) {
   return hn::Sub(d, hn::Mul(length, hn::Round(hn::Mul(d, inv_length))));
 }
 
-template <bool kPeriodic>
+template <bool kPeriodic, bool kAnyJ>
 HWY_INLINE std::uint32_t* scan_runs(const Cells& c, const Probe& p, const std::uint32_t* begin,
                                     const std::uint32_t* end, int runs, std::uint32_t* out) {
   const D d;
@@ -47,12 +47,14 @@ HWY_INLINE std::uint32_t* scan_runs(const Cells& c, const Probe& p, const std::u
       }
       const V s = hn::Add(hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy)), hn::Mul(dz, dz));
       const auto near = hn::And(hn::Lt(s, r2), hn::FirstN(d, ke - k));
-      // The lanes kept, as indices: j > i among those within range, packed to the front of a
-      // vector that is stored whole (the caller's room covers a vector past the last kept).
+      // The lanes kept, as indices: j > i (any j with kAnyJ) among those within range, packed
+      // to the front of a vector that is stored whole (the caller's room covers a vector past
+      // the last kept).
       std::uint8_t bits[8] = {};
       hn::StoreMaskBits(d, near, bits);
       const auto j = hn::LoadU(du, c.elem + k);
-      const auto keep = hn::And(hn::LoadMaskBits(du, bits), hn::Gt(j, iv));
+      auto keep = hn::LoadMaskBits(du, bits);
+      if constexpr (!kAnyJ) keep = hn::And(keep, hn::Gt(j, iv));
       hn::StoreU(hn::Compress(j, keep), du, out);
       out += hn::CountTrue(du, keep);
     }
@@ -62,9 +64,12 @@ HWY_INLINE std::uint32_t* scan_runs(const Cells& c, const Probe& p, const std::u
 
 std::uint32_t* Scan(const Cells& c, const Probe& p, const std::uint32_t* begin,
                     const std::uint32_t* end, int runs, std::uint32_t* out) {
-  if (p.length[0] != 0.0 || p.length[1] != 0.0 || p.length[2] != 0.0)
-    return scan_runs<true>(c, p, begin, end, runs, out);
-  return scan_runs<false>(c, p, begin, end, runs, out);
+  const bool periodic = p.length[0] != 0.0 || p.length[1] != 0.0 || p.length[2] != 0.0;
+  if (p.any_j)
+    return periodic ? scan_runs<true, true>(c, p, begin, end, runs, out)
+                    : scan_runs<false, true>(c, p, begin, end, runs, out);
+  return periodic ? scan_runs<true, false>(c, p, begin, end, runs, out)
+                  : scan_runs<false, false>(c, p, begin, end, runs, out);
 }
 
 const char* TargetName() { return hwy::TargetName(HWY_TARGET); }

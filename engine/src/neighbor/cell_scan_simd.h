@@ -25,10 +25,12 @@ struct Probe {
   std::uint32_t i;
   double range2;
   double length[3], inv_length[3];
+  bool any_j = false;  // keep every j in range, not only j > i (candidates of other kinds than i's)
 };
 
 // Appends to `out`, in slot order over the runs [begin[r], end[r]) (r < runs), the element
-// index j of every slot with j > i whose minimum-image displacement d from the probe has
+// index j of every slot with j > i (every j with any_j) whose minimum-image displacement d from
+// the probe has
 // (d_x² + d_y²) + d_z² < range² (each product and sum rounded, no fused multiply-add; d
 // along a periodic axis as Domain::delta takes it); returns the new end. `out` must have room
 // for every candidate of the runs and kPad more (a vector is stored whole past the last kept).

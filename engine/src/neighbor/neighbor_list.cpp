@@ -139,12 +139,31 @@ void NeighborList::build(const Elements& el) {
   for (int a = 0; a < kElementKinds; ++a)
     layer_of[a] = all_kinds ? 0 : kinds_.involves(static_cast<ElementKind>(a)) ? layers++ : -1;
   if (all_kinds) layers = 1;
-  int partners[kElementKinds][kElementKinds];  // per kind: the layers it pairs with, then -1
+  // A pair of one kind is listed under its lower index (j > i); a pair of two kinds under the
+  // element of the kind with fewer elements (ties: the lower kind), whatever the indices: an
+  // NP-CNT list has a row per NP holding its segments. The driver then walks a few thousand
+  // full rows and prefetches the segments (the far elements of each row), not the segments'
+  // rows with an NP or two each, whose own lines it cannot prefetch (x_i at the row, f_i and t_i
+  // at the scatter were most of that pass's time on the medium film with 4000 NPs).
+  std::size_t kind_count[kElementKinds] = {};
+  if (!all_kinds)
+    for (const ElementKind k : el.kind) ++kind_count[static_cast<int>(k)];
+  const auto row_kind = [&](int a, int b) {  // whether pairs of kinds a ≠ b are rows of a
+    return kind_count[a] != kind_count[b] ? kind_count[a] < kind_count[b] : a < b;
+  };
+  int partners[kElementKinds][kElementKinds];     // per kind: the layers it scans, then -1
+  bool other_kind[kElementKinds][kElementKinds];  // ... and whether that layer is of another kind
   for (int a = 0; a < kElementKinds; ++a) {
     int m = 0;
-    for (int b = 0; b < kElementKinds; ++b)
-      if (all_kinds ? b == 0 : kinds_.has(static_cast<ElementKind>(a), static_cast<ElementKind>(b)))
-        partners[a][m++] = layer_of[b];
+    for (int b = 0; b < kElementKinds; ++b) {
+      const bool scans =
+          all_kinds ? b == 0
+                    : kinds_.has(static_cast<ElementKind>(a), static_cast<ElementKind>(b)) &&
+                          (a == b || row_kind(a, b));
+      if (!scans) continue;
+      other_kind[a][m] = !all_kinds && a != b;
+      partners[a][m++] = layer_of[b];
+    }
     for (; m < kElementKinds; ++m) partners[a][m] = -1;
   }
 
@@ -364,12 +383,14 @@ void NeighborList::build(const Elements& el) {
           const Runs rx = runs(cx, nx, wrap_x), ry = runs(cy, ny, wrap_y),
                      rz = runs(cz, nz, wrap_z);
           // The contiguous runs of candidates in the block: at most 2 × 3 × 3 per partner
-          // layer (wrapping axes split a run in two).
-          std::uint32_t run_begin[18 * kElementKinds], run_end[18 * kElementKinds];
-          int n_runs = 0;
+          // layer (wrapping axes split a run in two); group 0 the layer of i's own kind (j > i
+          // kept), group 1 the layers of other kinds (every j kept).
+          std::uint32_t run_begin[2][18 * kElementKinds], run_end[2][18 * kElementKinds];
+          int n_runs[2] = {0, 0};
           std::size_t candidates = 0;
           const int* partner = partners[static_cast<int>(el.kind[i])];
-          for (int p = 0; p < kElementKinds && partner[p] >= 0; ++p)
+          for (int p = 0; p < kElementKinds && partner[p] >= 0; ++p) {
+            const int g = other_kind[static_cast<int>(el.kind[i])][p] ? 1 : 0;
             for (int a = 0; a < rz.count; ++a)
               for (long z = rz.first[a]; z <= rz.last[a]; ++z)
                 for (int b = 0; b < ry.count; ++b)
@@ -379,11 +400,12 @@ void NeighborList::build(const Elements& el) {
                       const std::uint32_t kb = cell_start_[base + rx.first[e]],
                                           ke = cell_start_[base + rx.last[e] + 1];
                       if (kb == ke) continue;
-                      run_begin[n_runs] = kb;
-                      run_end[n_runs++] = ke;
+                      run_begin[g][n_runs[g]] = kb;
+                      run_end[g][n_runs[g]++] = ke;
                       candidates += ke - kb;
                     }
                   }
+          }
           // Room for every candidate and a vector more, so the scan can store before it counts.
           const std::size_t room = used + candidates + cell_scan::kPad;
           if (out.size() < room) out.resize(std::max(2 * out.size(), room));
@@ -392,7 +414,12 @@ void NeighborList::build(const Elements& el) {
           probe.z = el.x[i].z();
           probe.i = static_cast<std::uint32_t>(i);
           std::uint32_t* const first = out.data() + used;
-          std::uint32_t* o = cell_scan::scan(cells, probe, run_begin, run_end, n_runs, first);
+          std::uint32_t* o = first;
+          for (int g = 0; g < 2; ++g) {
+            if (n_runs[g] == 0) continue;
+            probe.any_j = g == 1;
+            o = cell_scan::scan(cells, probe, run_begin[g], run_end[g], n_runs[g], o);
+          }
           if (exclusion) {  // one pass over the pairs within range (of partner kinds only)
             std::uint32_t* w = first;
             for (std::uint32_t* r = first; r != o; ++r)
@@ -494,9 +521,9 @@ void NeighborList::load_state(StateReader& r, std::size_t n) {
   for (std::size_t i = 0; i < n; ++i) {
     if (offsets[i] > offsets[i + 1]) r.fail("offsets", "decrease at element " + std::to_string(i));
     for (std::uint32_t k = offsets[i]; k < offsets[i + 1]; ++k)
-      if (neighbors[k] <= i || neighbors[k] >= n)
-        r.fail("neighbors",
-               "entry " + std::to_string(k) + " is not an element after " + std::to_string(i));
+      if (neighbors[k] == i || neighbors[k] >= n)
+        r.fail("neighbors", "entry " + std::to_string(k) + " of element " + std::to_string(i) +
+                                " is not another element of the " + std::to_string(n));
   }
   builds_ = static_cast<std::size_t>(builds);
   check_planned_ = false;  // planned from the elements at the next check

@@ -1,5 +1,5 @@
 #pragma once
-// Cell list + Verlet list with a skin (half list: each pair once, j listed under i with i < j).
+// Cell list + Verlet list with a skin (half list: each pair once; see neighbors()).
 // Rebuilt only when some element has moved more than half the skin since the last build.
 // Distances are minimum images in the list's domain: along a periodic axis the cell grid spans the
 // box and wraps, and a pair is listed when its minimum image is within cutoff + skin. A list may
@@ -56,7 +56,10 @@ class NeighborList {
   // Largest displacement of any element since the last build (nm).
   double max_displacement(const Elements& el) const;
 
-  // Neighbours j > i of element i: neighbors()[offsets()[i] .. offsets()[i+1]).
+  // Neighbours of element i: neighbors()[offsets()[i] .. offsets()[i+1]), ascending. Each pair
+  // once: a pair of one kind under its lower index (j > i), a pair of two kinds under the
+  // element of the kind with fewer elements (ties: the lower kind), e.g. an NP-CNT pair under
+  // its NP, whatever the indices.
   const std::vector<std::uint32_t>& offsets() const { return offsets_; }
   const std::vector<std::uint32_t>& neighbors() const { return neighbors_; }
 
