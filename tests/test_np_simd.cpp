@@ -2,9 +2,10 @@
 // Scalar): isolated NP–segment pairs covering every branch of the law in both element orders, on
 // every instruction set this CPU runs; a film of tubes and NPs through the pair driver at 1 and 2
 // threads, with the batched sums' determinism and momentum balances, over a list of all kinds
-// (pairs under the segments) and over the NP–CNT sub-list (pairs under the NPs). The NP dashpots
-// (DashpotEvaluation::Scalar) on the same film; the NP–CNT dashpot in one pass with its contact,
-// bit for bit the two passes, in the driver and in a system.
+// (pairs under the segments) and over the NP–CNT sub-list (pairs under the NPs). The NP–NP law
+// (NpNpEvaluation::Scalar): pairs through every branch on every instruction set, and NPs through
+// the driver. The NP dashpots (DashpotEvaluation::Scalar) on the same film; the NP–CNT dashpot in
+// one pass with its contact, bit for bit the two passes, in the driver and in a system.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -17,6 +18,7 @@
 #include "hwy/targets.h"
 #include "mdem/core/cnt.h"
 #include "mdem/force/contact/np_cnt_contact.h"
+#include "mdem/force/contact/np_np_contact.h"
 #include "mdem/force/damping/np_contact_damping.h"
 #include "mdem/integrate/system.h"
 #include "mdem/neighbor/neighbor_list.h"
@@ -273,6 +275,130 @@ TEST(NpCntSimd, FilmForcesEqualTheScalarLawOpenDomain) { compare_on_film(Domain{
 
 TEST(NpCntSimd, FilmForcesEqualTheScalarLawPeriodic) {
   compare_on_film(Domain(Vec3(-20, -20, -50), Vec3(20, 20, 50), {true, true, false}));
+}
+
+// NP–NP centre displacements through every branch of the law: coincident, overlapping (the
+// linear branch below D = d_min), the well, the taper from 7 to 8 nm, and beyond the cutoff.
+struct NpNpCoverage {
+  int coincident = 0, linear = 0, power = 0, taper = 0, beyond = 0;
+};
+
+std::vector<Vec3> np_np_displacements(int n, unsigned seed, NpNpCoverage& cov) {
+  const NpNpParams p;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  std::vector<Vec3> out;
+  for (int m = 0; m < n; ++m) {
+    double R;
+    const int kind = m % 10;
+    if (kind == 0)
+      R = std::pow(10.0, -14.0 + 8.0 * u01(rng));  // 1e-14 .. 1e-6 nm
+    else if (kind < 3)
+      R = p.radius * (2.0 + p.d_min) * u01(rng);  // overlapping: D < d_min
+    else
+      R = 1.1 * p.cutoff() * u01(rng);
+    out.push_back(R * random_unit(rng));
+    if (R * R < 1e-24)
+      ++cov.coincident;
+    else if (R >= p.cutoff())
+      ++cov.beyond;
+    else if (R > p.taper_start)
+      ++cov.taper;
+    else if (R / p.radius - 2.0 < p.d_min)
+      ++cov.linear;
+    else
+      ++cov.power;
+  }
+  return out;
+}
+
+// Largest difference of the batched law from the scalar one over the displacements, a batch at a
+// time, relative to the pair's |U| + |f| (at least 1e-4 eV, as the NP–CNT comparison); a pair
+// beyond the cutoff must give exact zeros, and no pair a torque.
+double np_np_worst(const std::vector<Vec3>& ds) {
+  const NpNpKernel batched;
+  const NpNpKernel scalar(NpNpParams{}, NpNpEvaluation::Scalar);
+  EXPECT_TRUE(batched.batched());
+  EXPECT_FALSE(scalar.batched());
+  const Elements none;  // the law reads no element data
+  double worst = 0;
+  for (std::size_t start = 0; start < ds.size(); start += PairBatch::kCapacity) {
+    PairBatch b;
+    b.n = static_cast<int>(std::min<std::size_t>(PairBatch::kCapacity, ds.size() - start));
+    for (int p = 0; p < b.n; ++p) {
+      b.i[p] = 0;
+      b.j[p] = 1;
+      b.dx[p] = ds[start + p].x();
+      b.dy[p] = ds[start + p].y();
+      b.dz[p] = ds[start + p].z();
+    }
+    batched.batch(none, b);
+    for (int p = 0; p < b.n; ++p) {
+      const std::size_t m = start + static_cast<std::size_t>(p);
+      const Vec3 f(b.fx[p], b.fy[p], b.fz[p]);
+      EXPECT_EQ(Vec3(b.t1x[p], b.t1y[p], b.t1z[p]), Vec3::Zero()) << "pair " << m;
+      EXPECT_EQ(Vec3(b.t2x[p], b.t2y[p], b.t2z[p]), Vec3::Zero()) << "pair " << m;
+      PairForces r;
+      if (!scalar.evaluate(ds[m], r)) {
+        EXPECT_EQ(b.energy[p], 0.0) << "pair " << m << " (beyond the cutoff)";
+        EXPECT_EQ(f, Vec3::Zero()) << "pair " << m << " (beyond the cutoff)";
+        continue;
+      }
+      const double diff = std::max(std::abs(b.energy[p] - r.energy), (f - r.f1).norm());
+      worst = std::max(worst, diff / std::max(std::abs(r.energy) + r.f1.norm(), 1e-4));
+    }
+  }
+  return worst;
+}
+
+TEST(NpNpSimd, EveryInstructionSetEqualsTheScalarLaw) {
+  NpNpCoverage cov;
+  const std::vector<Vec3> ds = np_np_displacements(20000, 3, cov);
+  EXPECT_GT(cov.coincident, 100);
+  EXPECT_GT(cov.linear, 100);
+  EXPECT_GT(cov.power, 100);
+  EXPECT_GT(cov.taper, 100);
+  EXPECT_GT(cov.beyond, 100);
+  for (std::int64_t target : hwy::SupportedAndGeneratedTargets()) {
+    hwy::SetSupportedTargetsForTest(target);
+    const double worst = np_np_worst(ds);
+    EXPECT_LT(worst, kRoundOff) << hwy::TargetName(target);
+    std::printf("NP-NP on %s: largest relative difference %.3g\n", hwy::TargetName(target), worst);
+  }
+  hwy::SetSupportedTargetsForTest(0);
+}
+
+// NPs among tubes through the driver, over the NP–NP sub-list: the batched forces are the scalar
+// law's to round-off on 1 and 2 threads, the same bits on a second evaluation, and sum to zero.
+TEST(NpNpSimd, FilmForcesEqualTheScalarLaw) {
+  Elements el = film_with_nps(13);
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> u(-20.0, 20.0), z(-2.0, 2.0);
+  for (int k = 0; k < 450; ++k) el.add(nanoparticle(Vec3(u(rng), u(rng), z(rng))));  // crowded
+  const NpNpContact batched;
+  const NpNpContact scalar(NpNpParams{}, NpNpEvaluation::Scalar);
+  for (const Domain& domain :
+       {Domain{}, Domain(Vec3(-20, -20, -50), Vec3(20, 20, 50), {true, true, false})})
+    for (int threads : {1, 2}) {
+      const Forces ref = evaluate(scalar, el, threads, domain, true);
+      const Forces got = evaluate(batched, el, threads, domain, true);
+      EXPECT_NE(ref.energy, 0.0);
+      EXPECT_LT(relative_difference(ref, got), kRoundOff) << threads << " threads";
+      EXPECT_NEAR(got.energy, ref.energy, kRoundOff * std::abs(ref.energy));
+      const Forces again = evaluate(batched, el, threads, domain, true);
+      EXPECT_EQ(again.energy, got.energy);
+      Vec3 f_sum = Vec3::Zero();
+      double scale = 0;
+      for (std::size_t i = 0; i < el.size(); ++i) {
+        ASSERT_EQ(again.f[i], got.f[i]) << "element " << i;
+        EXPECT_EQ(got.t[i], Vec3::Zero());
+        if (el.kind[i] != ElementKind::Nanoparticle) EXPECT_EQ(got.f[i], Vec3::Zero());
+        f_sum += got.f[i];
+        scale = std::max(scale, got.f[i].norm());
+      }
+      EXPECT_GT(scale, 0.0);
+      EXPECT_LT(f_sum.norm(), 1e-12 * scale * el.size());
+    }
 }
 
 // Everything a force evaluation leaves: forces, torques, damping forces and torques, energy.

@@ -27,6 +27,10 @@ struct NpNpParams {
   double cutoff() const { return taper_start + taper_width; }
 };
 
+// How NpNpKernel evaluates the driver's pairs: over batches with the vectorised law (the default)
+// or pair by pair with the scalar law (the reference).
+enum class NpNpEvaluation { Batched, Scalar };
+
 // The NP–NP pair kernel (pair_driver.h).
 class NpNpKernel {
  public:
@@ -36,7 +40,7 @@ class NpNpKernel {
   static constexpr EnergyTerm kTerm = EnergyTerm::NpNp;
 
   // Throws std::invalid_argument naming the parameter and its allowed range.
-  explicit NpNpKernel(NpNpParams p = {});
+  explicit NpNpKernel(NpNpParams p = {}, NpNpEvaluation e = NpNpEvaluation::Batched);
   std::string_view name() const { return "np_np_contact"; }
   double cutoff() const { return p_.cutoff(); }
   KindPairs kinds() const {
@@ -48,6 +52,11 @@ class NpNpKernel {
   bool pair(const Elements&, std::size_t, std::size_t, const Vec3& d, PairForces& out) const {
     return evaluate(d, out);
   }
+  bool batched() const { return eval_ == NpNpEvaluation::Batched; }
+  // The batch's pairs by the vectorised NP–CNT law with an isotropic shape (np_cnt_simd with
+  // δ ≡ 1 and ρ = r_NP, which is this law: D = R/r_NP − 2, a central force, no torque); a lane
+  // with coincident centres by evaluate(). pow() in the scalar law, one Log and two Exp here.
+  void batch(const Elements& el, PairBatch& b) const;
   void stiffness(const Elements& el, std::size_t i, std::size_t j, const Vec3& d,
                  StiffnessSums& s) const;
   const NpNpParams& params() const { return p_; }
@@ -67,15 +76,18 @@ class NpNpKernel {
 
  private:
   NpNpParams p_;
+  NpNpEvaluation eval_;
   vdw_shape::SmoothstepCutoff fc_;
   vdw_shape::TwoPowerPotential v_;
+  double v_min_ = 0, dv_min_ = 0;  // V(d_min), V'(d_min): the linear branch's start
 };
 
 extern template class PairModel<NpNpKernel>;
 
 class NpNpContact final : public PairModel<NpNpKernel> {
  public:
-  explicit NpNpContact(NpNpParams p = {}) : PairModel<NpNpKernel>(p) {}
+  explicit NpNpContact(NpNpParams p = {}, NpNpEvaluation e = NpNpEvaluation::Batched)
+      : PairModel<NpNpKernel>(p, e) {}
   const NpNpParams& params() const { return k_.params(); }
 };
 
