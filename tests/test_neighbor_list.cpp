@@ -454,9 +454,9 @@ TEST(NeighborList, NeedsRebuildFollowsHalfTheSkin) {
 }
 
 // A sub-list checks only the elements that can change it: none when no two elements can form
-// one of its kind pairs, only its kinds' elements when they are few. The Verlet guarantee holds
-// all the same (compared with a fresh build), and a list restored from a checkpoint decides as
-// the one that was saved.
+// one of its kind pairs, only its kinds' elements when they are few or many. The Verlet guarantee
+// holds all the same (compared with a fresh build), and a list restored from a checkpoint decides
+// as the one that was saved.
 TEST(NeighborList, SubListsCheckOnlyTheElementsOfTheirKinds) {
   const ElementKind C = ElementKind::CntSegment, N = ElementKind::Nanoparticle;
   Elements el = cloud(uniform_box(3000, Vec3(0, 0, 0), Vec3(30, 30, 30), 31));
@@ -498,6 +498,21 @@ TEST(NeighborList, SubListsCheckOnlyTheElementsOfTheirKinds) {
   EXPECT_TRUE(pairs_of(np_np, el) == pairs_of(fresh(KindPairs::of(N, N), el), el));
   el.x[150].y() += 0.26;  // an NP
   EXPECT_TRUE(np_np.needs_rebuild(el));
+  // CNT-CNT among the same 40 NPs (most elements are segments): an NP's motion does not count,
+  // a segment's does.
+  el.x[150].y() -= 0.26;
+  NeighborList cnt_cnt(kCutoff, kSkin);
+  cnt_cnt.set_kinds(KindPairs::of(C, C));
+  cnt_cnt.build(el);
+  el.x[75].x() += 5.0;  // an NP
+  EXPECT_FALSE(cnt_cnt.needs_rebuild(el));
+  EXPECT_TRUE(pairs_of(cnt_cnt, el) == pairs_of(fresh(KindPairs::of(C, C), el), el));
+  EXPECT_GT(cnt_cnt.max_displacement(el), 4.9);  // (every element's displacement, as measured)
+  el.x[76].x() += 0.26;                          // a segment
+  EXPECT_TRUE(cnt_cnt.needs_rebuild(el));
+  el.x[76].x() -= 0.26;
+  el.x[75].x() -= 5.0;
+  el.x[150].y() += 0.26;
   el.x[150].y() -= 0.26;
   el.x[225].z() = std::numeric_limits<double>::quiet_NaN();  // a NaN NP asks for a rebuild
   EXPECT_TRUE(np_np.needs_rebuild(el));

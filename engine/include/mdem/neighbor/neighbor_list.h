@@ -91,12 +91,16 @@ class NeighborList {
   std::vector<std::vector<std::uint32_t>> thread_neighbors_;  // per-thread output
   std::vector<std::size_t> chunk_pos_;  // each chunk's start in its thread's output
 
-  // Which elements needs_rebuild checks: all; those of the listed kinds (check_idx_, ascending)
-  // when they are at most a quarter of all; none when no two elements can form a listed pair.
-  // Planned from the elements' kinds at the first check after a build or a load_state, so a
-  // resumed run rebuilds at the same steps.
-  enum class CheckScope { All, Listed, None };
+  // Which elements needs_rebuild checks: all (every element is of a listed kind); those of the
+  // listed kinds, by index (check_idx_, ascending) when they are at most a quarter of all, or
+  // (Kinds) by a pass over all that skips the others (a CNT-CNT list among NPs: an NP's motion
+  // does not change it); none when no two elements can form a listed pair. Planned from the
+  // elements' kinds at the first check after a build or a load_state, so a resumed run rebuilds
+  // at the same steps.
+  enum class CheckScope { All, Kinds, Listed, None };
   void plan_check(const Elements& el) const;
+  // Largest displacement since the build of an element of a listed kind (nm).
+  double max_displacement_of_kinds(const Elements& el) const;
   mutable CheckScope check_scope_ = CheckScope::All;
   mutable bool check_planned_ = false;
   mutable std::vector<std::uint32_t> check_idx_;
