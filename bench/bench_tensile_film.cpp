@@ -14,7 +14,10 @@
 // 20), zeroes its motion and relaxes it for R ps (default 100) at a step picked anew, then writes
 // DIR/medium_seed13_nps<N>.state. The benchmark reads MDEM_TENSILE_FILM_DIR (default: the
 // working directory); without a state file it says so and steps the film as generated
-// (relaxed_ps 0 in its counters). 80 steps are timed (4 × 20: a few neighbour-list rebuilds).
+// (relaxed_ps 0 in its counters). 80 steps are timed (4 × 20: at most a rebuild or two of the
+// neighbour lists, which come every 50-80 steps on the relaxed film); MDEM_TENSILE_FILM_STEPS=S
+// times 4 × S steps instead (1..100000; e.g. 250, so the neighbour phase holds the rebuilds a
+// long run has).
 // morton:1 runs the system in Morton memory order (IntegratorSettings::memory_order, reordered at
 // the first list build and every 10th rebuild; the jobs run as built). Counters:
 // element_steps_per_s, the step's phases (pair_ms, neighbor_ms, integrate_ms), the neighbour
@@ -28,6 +31,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -199,7 +203,29 @@ const FilmState& film(int nps) {
   return cache.emplace(nps, std::move(*s)).first->second;
 }
 
+// Steps per timed iteration: MDEM_TENSILE_FILM_STEPS, default 20; 0 (and a message) when the
+// variable is not a whole number in 1..100000.
+long steps_per_iteration(std::string& error) {
+  const char* v = std::getenv("MDEM_TENSILE_FILM_STEPS");
+  if (!v) return 20;
+  char* end = nullptr;
+  errno = 0;
+  const long s = std::strtol(v, &end, 10);
+  if (end == v || *end != '\0' || errno != 0 || s < 1 || s > 100000) {
+    error = std::string("MDEM_TENSILE_FILM_STEPS='") + v +
+            "': give the steps per timed iteration, a whole number from 1 to 100000";
+    return 0;
+  }
+  return s;
+}
+
 void BM_RelaxedMediumFilm(benchmark::State& state) {
+  std::string error;
+  const long per_iteration = steps_per_iteration(error);
+  if (per_iteration == 0) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
   const int nps = state.range(1) != 0 ? kNps : 0;
   const FilmState& f = film(nps);
   const auto rest = rest_bonds(generated_film(nps));
@@ -215,7 +241,7 @@ void BM_RelaxedMediumFilm(benchmark::State& state) {
     return b;
   };
   const double b0 = builds();
-  const double steps = bench::timed_steps(state, *sys, 20);
+  const double steps = bench::timed_steps(state, *sys, per_iteration);
   bench::add_phase_counters(state, t0, sys->timers(), steps);
   // Sub-list builds (all kind pairs together) per timed step: the neighbour phase is these
   // builds plus one displacement check per sub-list and step.
