@@ -17,6 +17,27 @@ struct Constants {
   double v_min, dv_min;                       // V(d_min), V'(d_min): the linear branch below
 };
 
+// The constants of a contact with parameters P (epsilon, A, B, alpha, beta, d_min and cutoff(), as
+// NpCntParams and NpNpParams hold them), its cutoff ramp from fc_start over fc_width, 1/ρ, δ's
+// coefficients, and V(d_min), V'(d_min).
+template <class P>
+Constants constants_of(const P& p, double fc_start, double fc_width, double inv_rho,
+                       const std::array<double, 6>& delta, double v_min, double dv_min) {
+  return {p.cutoff() * p.cutoff(),
+          fc_start,
+          fc_width,
+          inv_rho,
+          delta,
+          4.0 * p.epsilon,
+          p.A,
+          p.B,
+          p.alpha,
+          p.beta,
+          p.d_min,
+          v_min,
+          dv_min};
+}
+
 // Lanes of pairs: inputs d = x_NP − x_seg and the segment's unit axis b; outputs the energy, the
 // force on the NP (−f on the segment) and the segment's torque. Every array holds n doubles.
 struct Lanes {

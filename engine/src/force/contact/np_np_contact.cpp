@@ -50,19 +50,9 @@ void NpNpKernel::batch(const Elements&, PairBatch& b) const {
     bx[p] = 1.0;
     by[p] = bz[p] = 0.0;
   }
-  const np_cnt_simd::Constants k{p_.cutoff() * p_.cutoff(),
-                                 fc_.start,
-                                 fc_.width,
-                                 1.0 / p_.radius,
-                                 {1.0, 0.0, 0.0, 0.0, 0.0, 0.0},  // δ ≡ 1
-                                 4.0 * p_.epsilon,
-                                 p_.A,
-                                 p_.B,
-                                 p_.alpha,
-                                 p_.beta,
-                                 p_.d_min,
-                                 v_min_,
-                                 dv_min_};
+  const np_cnt_simd::Constants k = np_cnt_simd::constants_of(
+      p_, fc_.start, fc_.width, 1.0 / p_.radius, {1.0, 0.0, 0.0, 0.0, 0.0, 0.0},  // δ ≡ 1
+      v_min_, dv_min_);
   const np_cnt_simd::Lanes l{dx, dy, dz, bx, by, bz, e, fx, fy, fz, tx, ty, tz};
   const bool coincident = np_cnt_simd::evaluate(k, l, static_cast<std::size_t>(lanes));
   for (int p = 0; p < b.n; ++p) {
