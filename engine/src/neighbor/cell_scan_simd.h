@@ -30,10 +30,10 @@ struct Probe {
 
 // Appends to `out`, in slot order over the runs [begin[r], end[r]) (r < runs), the element
 // index j of every slot with j > i (every j with any_j) whose minimum-image displacement d from
-// the probe has
-// (d_x² + d_y²) + d_z² < range² (each product and sum rounded, no fused multiply-add; d
-// along a periodic axis as Domain::delta takes it); returns the new end. `out` must have room
-// for every candidate of the runs and kPad more (a vector is stored whole past the last kept).
+// the probe has (d_x² + d_y²) + d_z² < range² (each product and sum rounded, no fused
+// multiply-add; d along a periodic axis as Domain::delta takes it); returns the new end. `out` must
+// have room for every candidate of the runs and kPad more (a vector is stored whole past the last
+// kept).
 std::uint32_t* scan(const Cells& c, const Probe& p, const std::uint32_t* begin,
                     const std::uint32_t* end, int runs, std::uint32_t* out);
 

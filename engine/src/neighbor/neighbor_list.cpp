@@ -60,25 +60,14 @@ NeighborList::NeighborList(double cutoff, double skin, Domain domain)
     throw std::invalid_argument("neighbour list: " + e);
 }
 
-double NeighborList::max_displacement(const Elements& el) const {
+double NeighborList::max_displacement(const Elements& el) const { return largest_move(el, false); }
+
+double NeighborList::largest_move(const Elements& el, bool of_kinds) const {
   const std::size_t n = el.size();
   if (builds_ == 0 || n != x_at_build_.size()) return std::numeric_limits<double>::infinity();
-  const Vec3* x = el.x.data();
-  const Vec3* x0 = x_at_build_.data();
-  double m2 = 0.0;
-  const long nl = static_cast<long>(n);
-#pragma omp parallel for schedule(static) reduction(max : m2) if (n >= kParallelMin)
-  for (long i = 0; i < nl; ++i) {
-    m2 = std::max(m2, moved2(x[i], x0[i]));
-  }
-  return std::sqrt(m2);
-}
-
-double NeighborList::max_displacement_of_kinds(const Elements& el) const {
-  const std::size_t n = el.size();
-  bool involved[kElementKinds];
+  bool counted[kElementKinds];
   for (int a = 0; a < kElementKinds; ++a)
-    involved[a] = kinds_.involves(static_cast<ElementKind>(a));
+    counted[a] = !of_kinds || kinds_.involves(static_cast<ElementKind>(a));
   const Vec3* x = el.x.data();
   const Vec3* x0 = x_at_build_.data();
   const ElementKind* kind = el.kind.data();
@@ -86,7 +75,7 @@ double NeighborList::max_displacement_of_kinds(const Elements& el) const {
   const long nl = static_cast<long>(n);
 #pragma omp parallel for schedule(static) reduction(max : m2) if (n >= kParallelMin)
   for (long i = 0; i < nl; ++i) {
-    if (involved[static_cast<int>(kind[i])]) m2 = std::max(m2, moved2(x[i], x0[i]));
+    if (counted[static_cast<int>(kind[i])]) m2 = std::max(m2, moved2(x[i], x0[i]));
   }
   return std::sqrt(m2);
 }
@@ -128,19 +117,17 @@ bool NeighborList::needs_rebuild(const Elements& el) const {
   }
   // Only the elements of the listed kinds can change the list: none when no two of them can pair
   // (an NP-CNT list without NPs), few for a list of a rare kind (NP-NP), not the NPs for a
-  // CNT-CNT list (fast NPs rebuilt the vdW list of a film with NPs every 50 steps where the
-  // film alone went 80). Written so that a NaN
-  // displacement asks for a rebuild (which then reports the element).
+  // CNT-CNT list (fast NPs rebuilt the vdW list of a film with NPs every 50 steps where the film
+  // alone went 80). Written so that a NaN displacement asks for a rebuild (which then reports
+  // the element).
   if (check_scope_ == CheckScope::None) return false;
   double moved = 0.0;
   if (check_scope_ == CheckScope::Listed) {
     for (const std::uint32_t i : check_idx_)
       moved = std::max(moved, moved2(el.x[i], x_at_build_[i]));
     moved = std::sqrt(moved);
-  } else if (check_scope_ == CheckScope::Kinds) {
-    moved = max_displacement_of_kinds(el);
   } else {
-    moved = max_displacement(el);
+    moved = largest_move(el, check_scope_ == CheckScope::Kinds);
   }
   return !(moved <= 0.5 * skin_);
 }

@@ -99,8 +99,9 @@ class NeighborList {
   // at the same steps.
   enum class CheckScope { All, Kinds, Listed, None };
   void plan_check(const Elements& el) const;
-  // Largest displacement since the build of an element of a listed kind (nm).
-  double max_displacement_of_kinds(const Elements& el) const;
+  // Largest displacement since the build of any element, or (of_kinds) of an element of a listed
+  // kind (nm); infinite before the first build or when the element count changed.
+  double largest_move(const Elements& el, bool of_kinds) const;
   mutable CheckScope check_scope_ = CheckScope::All;
   mutable bool check_planned_ = false;
   mutable std::vector<std::uint32_t> check_idx_;
