@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -48,6 +49,13 @@ inline double moved2(const Vec3& x, const Vec3& x0) {
   return d2 <= std::numeric_limits<double>::max() ? d2 : std::numeric_limits<double>::infinity();
 }
 
+// How many elements of each kind.
+std::array<std::size_t, kElementKinds> kind_counts(const Elements& el) {
+  std::array<std::size_t, kElementKinds> count{};
+  for (const ElementKind k : el.kind) ++count[static_cast<int>(k)];
+  return count;
+}
+
 }  // namespace
 
 NeighborList::NeighborList(double cutoff, double skin, Domain domain)
@@ -65,14 +73,18 @@ double NeighborList::max_displacement(const Elements& el) const { return largest
 double NeighborList::largest_move(const Elements& el, bool of_kinds) const {
   const std::size_t n = el.size();
   if (builds_ == 0 || n != x_at_build_.size()) return std::numeric_limits<double>::infinity();
-  bool counted[kElementKinds];
-  for (int a = 0; a < kElementKinds; ++a)
-    counted[a] = !of_kinds || kinds_.involves(static_cast<ElementKind>(a));
   const Vec3* x = el.x.data();
   const Vec3* x0 = x_at_build_.data();
-  const ElementKind* kind = el.kind.data();
-  double m2 = 0.0;
   const long nl = static_cast<long>(n);
+  double m2 = 0.0;
+  if (!of_kinds) {  // (no kind byte read: the pass over all elements streams x and x0 only)
+#pragma omp parallel for schedule(static) reduction(max : m2) if (n >= kParallelMin)
+    for (long i = 0; i < nl; ++i) m2 = std::max(m2, moved2(x[i], x0[i]));
+    return std::sqrt(m2);
+  }
+  bool counted[kElementKinds];
+  for (int a = 0; a < kElementKinds; ++a) counted[a] = kinds_.involves(static_cast<ElementKind>(a));
+  const ElementKind* kind = el.kind.data();
 #pragma omp parallel for schedule(static) reduction(max : m2) if (n >= kParallelMin)
   for (long i = 0; i < nl; ++i) {
     if (counted[static_cast<int>(kind[i])]) m2 = std::max(m2, moved2(x[i], x0[i]));
@@ -84,8 +96,7 @@ void NeighborList::plan_check(const Elements& el) const {
   check_idx_.clear();
   check_scope_ = CheckScope::All;
   if (kinds_.is_all()) return;
-  std::size_t count[kElementKinds] = {};
-  for (const ElementKind k : el.kind) ++count[static_cast<int>(k)];
+  const auto count = kind_counts(el);
   bool possible = false;
   std::size_t involved = 0;
   for (int a = 0; a < kElementKinds; ++a) {
@@ -157,9 +168,8 @@ void NeighborList::build(const Elements& el) {
   // full rows and prefetches the segments (the far elements of each row), not the segments'
   // rows with an NP or two each, whose own lines it cannot prefetch (x_i at the row, f_i and t_i
   // at the scatter were most of that pass's time on the medium film with 4000 NPs).
-  std::size_t kind_count[kElementKinds] = {};
-  if (!all_kinds)
-    for (const ElementKind k : el.kind) ++kind_count[static_cast<int>(k)];
+  std::array<std::size_t, kElementKinds> kind_count{};
+  if (!all_kinds) kind_count = kind_counts(el);
   const auto row_kind = [&](int a, int b) {  // whether pairs of kinds a ≠ b are rows of a
     return kind_count[a] != kind_count[b] ? kind_count[a] < kind_count[b] : a < b;
   };
