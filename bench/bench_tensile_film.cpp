@@ -17,7 +17,8 @@
 // (relaxed_ps 0 in its counters). 80 steps are timed (4 × 20: at most a rebuild or two of the
 // neighbour lists, which come every 50-80 steps on the relaxed film); MDEM_TENSILE_FILM_STEPS=S
 // times 4 × S steps instead (1..100000; e.g. 250, so the neighbour phase holds the rebuilds a
-// long run has).
+// long run has). MDEM_TENSILE_FILM_SAFETY=s steps at s × the critical step (default 0.6, the
+// jobs' default; (0, 1]) and balance_error reports the energy balance over the run.
 // morton:1 runs the system in Morton memory order (IntegratorSettings::memory_order, reordered at
 // the first list build and every 10th rebuild; the jobs run as built). Counters:
 // element_steps_per_s, the step's phases (pair_ms, neighbor_ms, integrate_ms), the neighbour
@@ -219,10 +220,28 @@ long steps_per_iteration(std::string& error) {
   return s;
 }
 
+// The auto step's fraction of the critical step: MDEM_TENSILE_FILM_SAFETY, default 0.6 (the
+// jobs' default, IntegratorSettings::safety); 0 (and a message) when the variable is not a
+// number in (0, 1], the range `mdem run tensile --safety` takes.
+double safety_factor(std::string& error) {
+  const char* v = std::getenv("MDEM_TENSILE_FILM_SAFETY");
+  if (!v) return IntegratorSettings{}.safety;
+  char* end = nullptr;
+  errno = 0;
+  const double s = std::strtod(v, &end);
+  if (end == v || *end != '\0' || errno != 0 || !(s > 0.0 && s <= 1.0)) {
+    error = std::string("MDEM_TENSILE_FILM_SAFETY='") + v +
+            "': give the fraction of the critical step, a number in (0, 1]";
+    return 0;
+  }
+  return s;
+}
+
 void BM_RelaxedMediumFilm(benchmark::State& state) {
   std::string error;
   const long per_iteration = steps_per_iteration(error);
-  if (per_iteration == 0) {
+  const double safety = error.empty() ? safety_factor(error) : 0.0;
+  if (!error.empty()) {
     state.SkipWithError(error.c_str());
     return;
   }
@@ -231,6 +250,7 @@ void BM_RelaxedMediumFilm(benchmark::State& state) {
   const auto rest = rest_bonds(generated_film(nps));
   IntegratorSettings set;
   set.threads = static_cast<int>(state.range(0));
+  set.safety = safety;
   if (state.range(2) != 0) set.memory_order = MemoryOrder::Morton;
   auto sys = tensile_film_system(f.el, set, kDashpot, rest.get());
   sys->run(5);  // warm-up
@@ -249,6 +269,9 @@ void BM_RelaxedMediumFilm(benchmark::State& state) {
   state.counters["sub_lists"] = static_cast<double>(sys->pair_table().entries().size());
   const double n = static_cast<double>(sys->elements().size());
   state.counters["dt_fs"] = sys->dt() * 1e3;
+  // The energy balance's error over the warm-up and every timed step (a run that a larger
+  // safety factor makes unstable shows here, or stops on the engine's guard).
+  state.counters["balance_error"] = sys->energy_balance_error();
   state.counters["relaxed_ps"] = f.relax_ps;
   state.counters["half_pairs_per_segment"] = pairs_per_segment(*sys);
   const double listed =
