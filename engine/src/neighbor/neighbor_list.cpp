@@ -76,20 +76,19 @@ double NeighborList::largest_move(const Elements& el, bool of_kinds) const {
   const Vec3* x = el.x.data();
   const Vec3* x0 = x_at_build_.data();
   const long nl = static_cast<long>(n);
-  double m2 = 0.0;
-  if (!of_kinds) {  // (no kind byte read: the pass over all elements streams x and x0 only)
+  // One pass, instantiated with a test that reads no kind byte when every element counts.
+  const auto pass = [&](auto counts) {
+    double m2 = 0.0;
 #pragma omp parallel for schedule(static) reduction(max : m2) if (n >= kParallelMin)
-    for (long i = 0; i < nl; ++i) m2 = std::max(m2, moved2(x[i], x0[i]));
+    for (long i = 0; i < nl; ++i)
+      if (counts(i)) m2 = std::max(m2, moved2(x[i], x0[i]));
     return std::sqrt(m2);
-  }
+  };
+  if (!of_kinds) return pass([](long) { return true; });
   bool counted[kElementKinds];
   for (int a = 0; a < kElementKinds; ++a) counted[a] = kinds_.involves(static_cast<ElementKind>(a));
   const ElementKind* kind = el.kind.data();
-#pragma omp parallel for schedule(static) reduction(max : m2) if (n >= kParallelMin)
-  for (long i = 0; i < nl; ++i) {
-    if (counted[static_cast<int>(kind[i])]) m2 = std::max(m2, moved2(x[i], x0[i]));
-  }
-  return std::sqrt(m2);
+  return pass([&](long i) { return counted[static_cast<int>(kind[i])]; });
 }
 
 void NeighborList::plan_check(const Elements& el) const {
