@@ -41,6 +41,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -51,6 +52,7 @@
 #include "mdem/core/units.h"
 #include "mdem/force/bond/parallel_bond.h"
 #include "mdem/force/contact/anisotropic_vdw.h"
+#include "mdem/integrate/spectrum.h"
 #include "mdem/io/state_io.h"
 #include "mdem/job/prerelax_criterion.h"
 #include "mdem/job/tensile_job.h"
@@ -287,6 +289,116 @@ BENCHMARK(BM_RelaxedMediumFilm)
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond)
     ->Iterations(4);
+
+// How far the automatic step's critical step (a Gershgorin bound over each element's summed
+// stiffness bounds, System::compute_critical_dt) is below the relaxed film's true one, 2/ω_max
+// from Lanczos over differenced forces (integrate/spectrum.h; undamped), and what stands in the
+// way of a true one. Counters (dt in fs):
+// - gershgorin_dt_fs: with the relax stage's dashpots, as the job picks it; gershgorin_undamped_fs:
+//   the same system without them (the rest of the counters are of that system);
+// - spectral_dt_fs, 2/ω_max with differences of 1e-4 nm (the largest move of any element's point),
+//   spectral_fine_dt_fs with 1e-5 nm, smooth (1 when the two agree); spectral_over_gershgorin and
+//   auto_over_spectral (the automatic step at MDEM_TENSILE_FILM_SAFETY, default 0.6, over
+//   spectral_dt_fs); seeds_spread, the relative difference of ω_max from a second random start;
+// - knee_pairs_1e-6 ... knee_pairs_1e-2: crossed vdW pairs (|b1·b2| < 0.9999) whose centre
+//   distance is within 1e-6 ... 1e-2 nm of W's knee 2.75 r, where model.md §4's M(R, γ) has a
+//   kink and the pair force jumps (smoothly distributed distances would give counts in the ratio
+//   of the windows, 10 per decade);
+// - kinked_elements: elements whose force derivative along a random displacement differs by more
+//   than 1 % between differences of 1e-5 and 1e-6 nm.
+// One iteration: the time is the estimates'.
+void BM_RelaxedMediumFilmCriticalStep(benchmark::State& state) {
+  std::string error;
+  const double safety = safety_factor(error);
+  if (!error.empty()) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  const int nps = state.range(1) != 0 ? kNps : 0;
+  const FilmState& f = film(nps);
+  const auto rest = rest_bonds(generated_film(nps));
+  IntegratorSettings set;
+  set.threads = static_cast<int>(state.range(0));
+  set.safety = safety;
+  auto damped = tensile_film_system(f.el, set, kDashpot, rest.get());
+  damped->initialize();
+  const double gershgorin = damped->critical_dt();
+  const double auto_dt = damped->dt();
+  damped.reset();
+  auto sys = tensile_film_system(f.el, set, 0.0, rest.get());
+  sys->initialize();
+  SpectrumSettings s1;
+  s1.displacement = 1e-4;
+  s1.tolerance = 1e-6;
+  s1.max_iterations = 300;
+  SpectrumSettings s2 = s1;
+  s2.seed = 2;
+  s2.check_smoothness = false;
+  SpectrumEstimate e, other;
+  for (auto _ : state) {
+    e = largest_frequency(*sys, s1);
+    other = largest_frequency(*sys, s2);
+  }
+  if (!e.converged || !other.converged) state.SetLabel("not converged");
+  state.counters["gershgorin_dt_fs"] = gershgorin * 1e3;
+  state.counters["gershgorin_undamped_fs"] = sys->critical_dt() * 1e3;
+  state.counters["spectral_dt_fs"] = e.critical_dt * 1e3;
+  state.counters["spectral_fine_dt_fs"] = 2e3 / e.omega_fine;
+  state.counters["smooth"] = e.smooth ? 1 : 0;
+  state.counters["spectral_over_gershgorin"] = e.critical_dt / sys->critical_dt();
+  state.counters["auto_over_spectral"] = auto_dt / e.critical_dt;
+  state.counters["seeds_spread"] = std::abs(e.omega_max - other.omega_max) / e.omega_max;
+  state.counters["lanczos_iterations"] = e.iterations;
+
+  // Crossed vdW pairs at W's knee.
+  const auto* vdw = sys->find<AnisotropicVdw>();
+  const NeighborList& list = *sys->neighbors(*vdw);
+  const VdwParams p;
+  const double knee = p.w_knee * p.radius;
+  Elements& el = sys->elements();
+  std::array<double, 5> near{};  // within 1e-6, 1e-5, 1e-4, 1e-3, 1e-2 nm of the knee
+  for (std::size_t i = 0; i < el.size(); ++i)
+    for (std::uint32_t m = list.offsets()[i]; m < list.offsets()[i + 1]; ++m) {
+      const std::uint32_t j = list.neighbors()[m];
+      if (el.kind[i] != ElementKind::CntSegment || el.kind[j] != ElementKind::CntSegment ||
+          el.cnt_pair_excluded(i, j, p.intra_tube_exclusion) ||
+          !(std::abs(el.axis(i).dot(el.axis(j))) < 0.9999))
+        continue;
+      const double off = std::abs((el.x[j] - el.x[i]).norm() - knee);
+      for (int k = 0; k < 5; ++k) near[k] += off < std::pow(10.0, k - 6);
+    }
+  for (int k = 0; k < 5; ++k) state.counters["knee_pairs_1e" + std::to_string(k - 6)] = near[k];
+
+  // Elements whose force is not smooth at the 1e-5 nm scale.
+  const std::vector<Vec3> x0 = el.x;
+  std::vector<Vec3> dir(el.size());
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g;
+  for (Vec3& d : dir) d = Vec3(g(rng), g(rng), g(rng)).normalized();
+  const auto derivative = [&](double h) {  // (f(x0 + h dir) − f(x0 − h dir)) / 2h per element
+    std::vector<Vec3> d(el.size());
+    for (std::size_t i = 0; i < el.size(); ++i) el.x[i] = x0[i] + h * dir[i];
+    sys->refresh();
+    for (std::size_t i = 0; i < el.size(); ++i) d[i] = el.f[i];
+    for (std::size_t i = 0; i < el.size(); ++i) el.x[i] = x0[i] - h * dir[i];
+    sys->refresh();
+    for (std::size_t i = 0; i < el.size(); ++i) d[i] = (d[i] - el.f[i]) / (2.0 * h);
+    return d;
+  };
+  const std::vector<Vec3> coarse = derivative(1e-5), fine = derivative(1e-6);
+  el.x = x0;
+  sys->refresh();
+  double kinked = 0;
+  for (std::size_t i = 0; i < el.size(); ++i)
+    kinked += (fine[i] - coarse[i]).norm() > 1e-2 * coarse[i].norm();
+  state.counters["kinked_elements"] = kinked;
+}
+BENCHMARK(BM_RelaxedMediumFilmCriticalStep)
+    ->ArgNames({"threads", "nps"})
+    ->ArgsProduct({{2}, {0, 1}})
+    ->UseRealTime()
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1);
 
 // Would a cluster-pair list (GROMACS's nbnxm: clusters of C elements, every pair of a listed
 // cluster pair evaluated in SIMD lanes, masked beyond the cutoff) beat the element-pair list on
