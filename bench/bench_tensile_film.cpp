@@ -239,6 +239,21 @@ double safety_factor(std::string& error) {
   return s;
 }
 
+// A benchmark's film: the state of its `nps` argument (range 1: 0 or 1 for the 4000 NPs), the
+// generated film's rest bonds, and settings for `threads` (range 0) at the safety factor.
+struct FilmCase {
+  const FilmState& film;
+  std::unique_ptr<ParallelBond> rest;
+  IntegratorSettings set;
+};
+FilmCase film_case(const benchmark::State& state, double safety) {
+  const int nps = state.range(1) != 0 ? kNps : 0;
+  FilmCase c{film(nps), rest_bonds(generated_film(nps)), {}};
+  c.set.threads = static_cast<int>(state.range(0));
+  c.set.safety = safety;
+  return c;
+}
+
 void BM_RelaxedMediumFilm(benchmark::State& state) {
   std::string error;
   const long per_iteration = steps_per_iteration(error);
@@ -247,12 +262,7 @@ void BM_RelaxedMediumFilm(benchmark::State& state) {
     state.SkipWithError(error.c_str());
     return;
   }
-  const int nps = state.range(1) != 0 ? kNps : 0;
-  const FilmState& f = film(nps);
-  const auto rest = rest_bonds(generated_film(nps));
-  IntegratorSettings set;
-  set.threads = static_cast<int>(state.range(0));
-  set.safety = safety;
+  auto [f, rest, set] = film_case(state, safety);
   if (state.range(2) != 0) set.memory_order = MemoryOrder::Morton;
   auto sys = tensile_film_system(f.el, set, kDashpot, rest.get());
   sys->run(5);  // warm-up
@@ -314,12 +324,7 @@ void BM_RelaxedMediumFilmCriticalStep(benchmark::State& state) {
     state.SkipWithError(error.c_str());
     return;
   }
-  const int nps = state.range(1) != 0 ? kNps : 0;
-  const FilmState& f = film(nps);
-  const auto rest = rest_bonds(generated_film(nps));
-  IntegratorSettings set;
-  set.threads = static_cast<int>(state.range(0));
-  set.safety = safety;
+  const auto [f, rest, set] = film_case(state, safety);
   auto damped = tensile_film_system(f.el, set, kDashpot, rest.get());
   damped->initialize();
   const double gershgorin = damped->critical_dt();
