@@ -11,15 +11,19 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <random>
 
 #include "mdem/core/cnt.h"
 #include "mdem/core/units.h"
 #include "mdem/force/bond/parallel_bond.h"
 #include "mdem/force/contact/anisotropic_vdw.h"
 #include "mdem/force/contact/linear_contact.h"
+#include "mdem/force/contact/np_cnt_contact.h"
+#include "mdem/force/contact/np_np_contact.h"
 #include "mdem/integrate/spectrum.h"
 #include "mdem/integrate/system.h"
 #include "mdem/scene/grain.h"
+#include "mdem/scene/nanoparticle.h"
 #include "mdem/scene/tube_builder.h"
 
 namespace mdem {
@@ -201,6 +205,65 @@ TEST(Spectrum, WithoutTheCheckTwoForceEvaluationsPerStep) {
   const SpectrumEstimate e = largest_frequency(sys, s);
   EXPECT_EQ(e.force_evaluations, 2L * e.iterations);
   EXPECT_EQ(e.omega_fine, 0);
+}
+
+Vec3 random_unit(std::mt19937_64& g) {
+  std::normal_distribution<double> n;
+  return Vec3(n(g), n(g), n(g)).normalized();
+}
+
+// The automatic step's critical step is a bound: at most the true 2/ω_max of the state, for a
+// pair of each contact kind at random separations and orientations over its whole reach
+// (overlapping, in the well, in the cutoff ramp). A state where the forces are not smooth at the
+// difference's scale (a pair at a kink of its law) has no ω_max to compare with and is skipped.
+// Two NPs have one stiff mode, the radial one, which Gershgorin's bound gives exactly: the
+// comparison allows the differences' error (1e-6).
+TEST(Spectrum, TheBoundHoldsForEveryContactAtRandomStates) {
+  std::mt19937_64 g(11);
+  std::uniform_real_distribution<double> u(0, 1);
+  const auto check = [&](const char* what, Elements el, auto add_models, double R) {
+    System sys(std::move(el), one_thread());
+    add_models(sys);
+    sys.initialize();
+    SpectrumSettings s = tight();
+    s.tolerance = 1e-10;
+    const SpectrumEstimate e = largest_frequency(sys, s);
+    if (!e.smooth || !(e.omega_max > 0)) return 0;
+    EXPECT_LE(sys.critical_dt(), e.critical_dt * (1 + 1e-6))
+        << what << " at R = " << R << ": bound " << sys.critical_dt() << " ps, true "
+        << e.critical_dt << " ps";
+    return 1;
+  };
+  int compared = 0;
+  for (int k = 0; k < 60; ++k) {
+    {  // two CNT segments of different tubes
+      const double R = 0.3 + u(g) * 5.0;
+      Elements el;
+      el.add(cnt_segment(Vec3::Zero(), quat_from_axis(random_unit(g)), 0, 0));
+      el.add(cnt_segment(R * random_unit(g), quat_from_axis(random_unit(g)), 1, 0));
+      compared += check(
+          "CNT-CNT", std::move(el), [](System& s) { s.add(std::make_unique<AnisotropicVdw>()); },
+          R);
+    }
+    {  // an NP beside a segment
+      const double R = 1.0 + u(g) * 4.4;
+      Elements el;
+      el.add(cnt_segment(Vec3::Zero(), quat_from_axis(random_unit(g)), 0, 0));
+      el.add(nanoparticle(R * random_unit(g)));
+      compared += check(
+          "NP-CNT", std::move(el), [](System& s) { s.add(std::make_unique<NpCntContact>()); }, R);
+    }
+    {  // two NPs, from the start of the linear branch (D = 0.1: below it the law has no
+       // curvature, and a repulsive central force no positive stiffness) to the cutoff
+      const double R = 5.26 + u(g) * 2.74;
+      Elements el;
+      el.add(nanoparticle(Vec3::Zero()));
+      el.add(nanoparticle(R * random_unit(g)));
+      compared += check(
+          "NP-NP", std::move(el), [](System& s) { s.add(std::make_unique<NpNpContact>()); }, R);
+    }
+  }
+  EXPECT_GE(compared, 175) << compared;  // of 180: only states at a kink are skipped
 }
 
 TEST(Spectrum, LeavesTheStateAsItWas) {
