@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "mdem/core/math.h"
 #include "mdem/integrate/system.h"
 
 namespace mdem {
@@ -114,9 +115,7 @@ SpectrumEstimate lanczos(System& sys, const SpectrumSettings& s, const std::vect
       const double sh = side == 0 ? h : -h;
       for (std::size_t i = 0; i < n; ++i) {
         el.x[i] = x0[i] + sh * c.move(el, v, i);
-        const Vec3 phi = sh * c.turn(el, v, i);
-        const double a = phi.norm();
-        el.q[i] = a > 0 ? (Quat(Eigen::AngleAxisd(a, phi / a)) * q0[i]).normalized() : q0[i];
+        el.q[i] = (quat_exp(sh * c.turn(el, v, i)) * q0[i]).normalized();
       }
       sys.refresh();
       ++out.force_evaluations;
