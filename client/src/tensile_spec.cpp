@@ -179,7 +179,10 @@ constexpr const char* kTensileAbout =
     "generated from --seed, pre-relaxed, relaxed hands-off for --relax ps, then pulled by two\n"
     "clamped grips (--grip-width) at --rate after a smooth --ramp to --strain, or cycled.\n"
     "Reports the stress-strain curve, Young's modulus, yield strain, tubes in tension,\n"
-    "shrinkage, toughness, and per cycle the loop area and modulus.\n";
+    "shrinkage, toughness, and per cycle the loop area and modulus.\n"
+    "--dt sets the step of the relaxation and the test (the thesis's: 0.03); the pre-\n"
+    "relaxations pick their own. A --dt above the automatic step's bound is checked against\n"
+    "the pre-relaxed film's critical step, measured, and must be within --safety of it.\n";
 
 std::string stages_text(const v1::TensileSpec& t) {
   std::ostringstream o;

@@ -438,12 +438,34 @@ void System::update_kinetic() {
   ledger_.kinetic_rotational = kr;
 }
 
-double System::compute_critical_dt(bool slow_only) const {
+StiffnessSums System::stiffness_sums(bool slow_only) const {
   StiffnessSums s;
   s.reset(el_.size());
   for (const auto& m : models_)
     if ((!slow_only || respa_.slow(*m)) && (inactive_.empty() || model_active(m.get())))
       m->add_stiffness(el_, pairs_.list_of(m.get()), s);
+  return s;
+}
+
+namespace {
+// Damping lowers the limit of an oscillator of frequency w: dt_c = (2/w)(√(1+ζ²) − ζ).
+double damped_limit(double w, double zeta) {
+  return 2.0 / w * (std::sqrt(1.0 + zeta * zeta) - zeta);
+}
+}  // namespace
+
+double System::damped_critical_dt(double omega) const {
+  if (std::isnan(omega)) throw std::invalid_argument("damped_critical_dt: the frequency is NaN");
+  if (!(omega > 0)) return std::numeric_limits<double>::infinity();
+  const StiffnessSums s = stiffness_sums(false);
+  double zeta = 0;
+  for (std::size_t i = 0; i < el_.size(); ++i)
+    zeta = std::max(zeta, s.c[i] / (el_.mass[i] * omega));
+  return damped_limit(omega, zeta);
+}
+
+double System::compute_critical_dt(bool slow_only) const {
+  const StiffnessSums s = stiffness_sums(slow_only);
   double dt = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < el_.size(); ++i) {
     const double m = el_.mass[i];
@@ -455,9 +477,8 @@ double System::compute_critical_dt(bool slow_only) const {
     const double w2 = std::max(2.0 * s.kt[i] / m, 2.0 * s.kr[i] / I) + coupling;
     if (!(w2 > 0)) continue;
     const double w = std::sqrt(w2);
-    // Damping lowers the limit: dt_c = (2/ω)(√(1+ζ²) − ζ), ζ ≤ Σc/(m ω).
-    const double zeta = s.c[i] / (m * w);
-    dt = std::min(dt, 2.0 / w * (std::sqrt(1.0 + zeta * zeta) - zeta));
+    // Damping lowers the limit, ζ ≤ Σc/(m ω).
+    dt = std::min(dt, damped_limit(w, s.c[i] / (m * w)));
   }
   return dt;
 }

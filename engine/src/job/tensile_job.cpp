@@ -18,6 +18,7 @@
 #include "mdem/force/contact/np_np_contact.h"
 #include "mdem/force/damping/np_contact_damping.h"
 #include "mdem/force/damping/viscous_contact_damping.h"
+#include "mdem/integrate/spectrum.h"
 #include "mdem/observe/aligned_pairs.h"
 #include "mdem/observe/cycle_analysis.h"
 #include "mdem/observe/film_report.h"
@@ -79,6 +80,12 @@ constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
 // The job's step is this fraction of the auto step (safety × critical step) of the state it is
 // picked on: the margin covers the stiffening a stage's own motion brings.
 constexpr double kAutoDtFactor = 0.9;
+// Largest move of any element's point (nm) in the differences that measure the true critical
+// step of a caller's dt (checked_given_dt). Finer moves resolve W's knee, where a crossed pair's
+// force jumps (docs/stability.md): on the medium film pre-relaxed 50 ps, Lanczos at 1e-4 nm did
+// not converge in 300 steps and two starts differed by 27 %; at 1e-3 nm they converged (58 and
+// 82 steps) and agreed to 1e-4. A vibration's own amplitude in these films is larger.
+constexpr double kGivenDtProbeMove = 1e-3;
 // The strain at which the fraction of tubes in tension is taken (§3.5), its averaging window (ps)
 // and the strains at which fragments are counted (§3.5 large strain).
 constexpr double kTensionStrain = 0.02;
@@ -619,12 +626,16 @@ TensileJob::TensileJob(Elements film, const TensileJobSpec& spec, IntegratorSett
   build(std::move(film));
 }
 
-double TensileJob::pick_dt(const Elements& el, const ParallelBond* rest) const {
-  if (!auto_dt_) return *settings_.dt;
+std::unique_ptr<System> TensileJob::probe(const Elements& el, const ParallelBond* rest) const {
   IntegratorSettings probe_settings = settings_;
   probe_settings.dt.reset();
-  const auto probe = tensile_film_system(el, probe_settings, spec_.dashpot_ratio, rest, spec_.laws);
-  probe->initialize();
+  auto p = tensile_film_system(el, probe_settings, spec_.dashpot_ratio, rest, spec_.laws);
+  p->initialize();
+  return p;
+}
+
+double TensileJob::pick_dt(const Elements& el, const ParallelBond* rest) const {
+  const auto probe = this->probe(el, rest);
   // With multiple time stepping the outer step respa_k·dt must also stay within safety × the
   // slow forces' own critical step (System::initialize refuses a given dt beyond it; the job
   // picks its step itself, so it keeps to both limits rather than stop mid-run on the guard).
@@ -634,20 +645,71 @@ double TensileJob::pick_dt(const Elements& el, const ParallelBond* rest) const {
   return kAutoDtFactor * dt;
 }
 
+double TensileJob::step_after_prerelax(const Elements& el, const ParallelBond* rest) const {
+  return given_dt_ ? checked_given_dt(el, rest) : pick_dt(el, rest);
+}
+
+double TensileJob::checked_given_dt(const Elements& el, const ParallelBond* rest) const {
+  const double dt = *given_dt_, safety = settings_.safety;
+  const auto probe = this->probe(el, rest);
+  const auto ps = [](double t) { return std::to_string(t) + " ps"; };
+  if (settings_.respa_k > 1 && settings_.respa_k * dt > safety * probe->critical_outer_dt())
+    throw ConfigError("tensile: the outer step respa_k x dt = " + ps(settings_.respa_k * dt) +
+                      " is above the slow forces' safe limit " +
+                      ps(safety * probe->critical_outer_dt()) + " on the film the relaxation " +
+                      "or test starts from: lower respa_k or dt, or use dt: auto");
+  const double bound = probe->critical_dt();
+  if (dt <= safety * bound) return dt;
+  // Above the automatic step's bound, which is up to 2x below the true limit on a relaxed film
+  // (docs/stability.md): measure the true one, from two random starts that must agree (the top
+  // of a film's spectrum is dense, and a Ritz value that met its tolerance early can be an
+  // interior one), the larger Ritz value plus its residual.
+  SpectrumSettings s;
+  s.displacement = kGivenDtProbeMove;
+  s.tolerance = 1e-4;
+  s.max_iterations = 300;
+  s.check_smoothness = false;
+  const SpectrumEstimate e1 = largest_frequency(*probe, s);
+  s.seed = 2;
+  const SpectrumEstimate e2 = largest_frequency(*probe, s);
+  const auto upper = [](const SpectrumEstimate& e) {
+    return std::sqrt(e.omega_max * e.omega_max + e.residual);
+  };
+  const double omega = std::max(upper(e1), upper(e2));
+  const bool agree = std::abs(e1.omega_max - e2.omega_max) <= 0.01 * omega;
+  if (!e1.converged || !e2.converged || !agree)
+    throw ConfigError("tensile: time step dt = " + ps(dt) + " is above the automatic step's safe " +
+                      "limit " + ps(safety * bound) + " on the film the relaxation or test " +
+                      "starts from, and its true critical step could not be measured (Lanczos " +
+                      "from two starts: " + std::to_string(2.0 / e1.omega_max) + " and " +
+                      std::to_string(2.0 / e2.omega_max) + " ps, " +
+                      (agree ? "not converged" : "not agreeing") +
+                      "): lower dt below that limit, or use dt: auto");
+  const double critical = probe->damped_critical_dt(omega);
+  if (dt <= safety * critical) return dt;
+  throw ConfigError("tensile: time step dt = " + ps(dt) + " is above the safe limit " +
+                    ps(safety * critical) + " of the film the relaxation or test starts from " +
+                    "(safety " + std::to_string(safety) + " x its critical step " + ps(critical) +
+                    ", 2/omega_max measured over its forces, with the dashpots' damping; the " +
+                    "automatic step's bound is " + ps(bound) + "): lower dt, raise safety " +
+                    "(at most 1), or use dt: auto");
+}
+
 void TensileJob::rebuild(Elements el, double dt, const ParallelBond* rest) {
   settings_.dt = dt;
   sys_ = tensile_film_system(std::move(el), settings_, spec_.dashpot_ratio, rest, spec_.laws);
 }
 
 void TensileJob::build(Elements el) {
-  auto_dt_ = !settings_.dt.has_value();
-  if (auto_dt_) {
-    // The job picks the step itself (pick_dt) from the state each stage starts from, and a
-    // checkpoint restores it: a resumed job's initialize() runs on the generated film before the
-    // checkpoint overwrites it, where a step picked on the relaxed film would be refused.
-    settings_.check_dt = false;
-    settings_.dt = pick_dt(el, nullptr);
-  }
+  // The pre-relaxation always picks its step (tensile.md §3.3: dt auto; the generated film's
+  // overlaps need a few fs); a caller's dt is the step of the relaxation and the test (§3.4: 30 fs
+  // as the thesis, or auto), checked when they start (checked_given_dt). The job checks every
+  // step itself, from the state each stage starts from, and a checkpoint restores it: a resumed
+  // job's initialize() runs on the generated film before the checkpoint overwrites it, where a
+  // step picked on the relaxed film would be refused.
+  given_dt_ = settings_.dt;
+  settings_.check_dt = false;
+  settings_.dt = pick_dt(el, nullptr);
   dt_start_ = *settings_.dt;
   sys_ = tensile_film_system(std::move(el), settings_, spec_.dashpot_ratio, nullptr, spec_.laws);
 
@@ -703,7 +765,8 @@ void TensileJob::build(Elements el) {
   // One sampling interval (and at least one step: the pre-relaxation's step, no longer than the
   // test's) past the loading's end, so that the sampler, one evaluation behind, records a frame
   // past the loading's end (summary() ends the curve at the target strain).
-  st.stop = StopCondition::after(protocol_->duration() + spec_.sample_every_ps + dt_start_);
+  st.stop = StopCondition::after(protocol_->duration() + spec_.sample_every_ps +
+                                 std::max(dt_start_, given_dt_.value_or(0.0)));
   test_index_ = stages().size();
   add_stage(std::make_unique<SystemStage>("tensile", *this, std::move(st)));
   add_state(records_);
@@ -730,7 +793,7 @@ void TensileJob::stage_finished(std::size_t k) {
       // whose step is picked anew: the overlaps that set the first step are gone.
       Elements el = sys.elements();
       zero_motion(el);
-      if (stage.dt_after == 0) stage.dt_after = pick_dt(el, sys.find<ParallelBond>());
+      if (stage.dt_after == 0) stage.dt_after = step_after_prerelax(el, sys.find<ParallelBond>());
       rebuild(std::move(el), stage.dt_after, sys.find<ParallelBond>());
       rec.dt_after_ps = stage.dt_after;
     }
@@ -740,12 +803,19 @@ void TensileJob::stage_finished(std::size_t k) {
     // the generated film's rest state, at a step picked for it (NPs may overlap tubes).
     Elements el = sys.elements();
     for (const Vec3& x : deposit_->positions) el.add(nanoparticle(x));
-    if (!deposit_->decided) deposit_->dt = pick_dt(el, sys.find<ParallelBond>());
-    rebuild(std::move(el), deposit_->dt, sys.find<ParallelBond>());
+    const ParallelBond* rest = sys.find<ParallelBond>();
+    if (!deposit_->decided) deposit_->dt = pick_dt(el, rest);
+    rebuild(el, deposit_->dt, rest);
     sys_->initialize();
     if (!deposit_->decided) {
       deposit_->overlaps = !np_prerelax_->measure(*sys_).overlap_free;
       deposit_->decided = true;
+      // No NP pre-relaxation: the test follows on this film, at the caller's step if given.
+      if (!deposit_->overlaps && given_dt_) {
+        deposit_->dt = checked_given_dt(el, rest);
+        rebuild(std::move(el), deposit_->dt, rest);
+        sys_->initialize();
+      }
     }
     np_stage_->skip = !deposit_->overlaps;
   }

@@ -232,6 +232,11 @@ class System {
   // Critical step of the current configuration (does not change dt); of the slow models alone
   // with slow_only (multiple time stepping's outer step).
   double compute_critical_dt(bool slow_only = false) const;
+  // The critical step 2/ω of the current configuration for a largest frequency ω (rad/ps) found
+  // otherwise (integrate/spectrum.h's largest_frequency, which leaves damping out), lowered for
+  // the contact dashpots as compute_critical_dt lowers it: (2/ω)(√(1+ζ²) − ζ) with the largest
+  // element's ζ = Σc/(m ω). Infinite for ω ≤ 0; throws std::invalid_argument for a NaN ω.
+  double damped_critical_dt(double omega) const;
 
  private:
   // Forces, energies and damping of the current state; with_local_damping false leaves the
@@ -258,6 +263,8 @@ class System {
   void check_memory_order() const;
   // What stops a reordering ("force model 'x' does not follow ..."), empty when nothing does.
   std::string reorder_blocker() const;
+  // Every active model's stiffness bounds (of the slow models alone with slow_only).
+  StiffnessSums stiffness_sums(bool slow_only) const;
   void update_kinetic();
   void check_finite_forces() const;
   void check_energy_growth();

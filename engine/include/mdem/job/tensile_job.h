@@ -163,11 +163,16 @@ struct StrainFrame {
 class TensileJob final : public Job {
  public:
   // Validates the spec, generates the film (quick: no dynamics) and sets up the stages. The time
-  // step: settings.dt if given, for every stage; else the job picks 0.9 × the auto step (safety
-  // × critical) of the state each run of stages starts from — the generated film (pre-
-  // relaxation), the pre-relaxed film (relaxation, test), the film with its deposited NPs
-  // (np_prerelax) and the NP-pre-relaxed film (test) — fixed within a stage so the grips' motion
-  // law is integrated exactly. A picked step is a stage result, restored from checkpoints. The
+  // step: the job picks 0.9 × the auto step (safety × critical) of the state each run of stages
+  // starts from — the generated film (pre-relaxation), the pre-relaxed film (relaxation, test),
+  // the film with its deposited NPs (np_prerelax) and the NP-pre-relaxed film (test) — fixed
+  // within a stage so the grips' motion law is integrated exactly. settings.dt, if given, is the
+  // step of the relaxation and the test instead (tensile.md §3.4: the thesis's 30 fs); the
+  // pre-relaxations still pick theirs. A given step must be within safety × the critical step of
+  // the film those stages start from: where the automatic step's Gershgorin bound is too low
+  // for it, the true critical step is measured (integrate/spectrum.h), and a step above
+  // safety × that makes the job fail there with a message naming both. A picked or checked step
+  // is a stage result, restored from checkpoints. The
   // test stage runs one sampling interval past the loading's end (the sampler lags one
   // evaluation). Throws std::invalid_argument for a bad spec or a film whose NPs do not fit.
   TensileJob(const TensileJobSpec& spec, IntegratorSettings settings);
@@ -222,10 +227,20 @@ class TensileJob final : public Job {
   class PrerelaxStage;
   void stage_finished(std::size_t k) override;
   void build(Elements el);  // the system from the film, then the stages
-  // The step for a system on `el` (bonds at rest as in `rest`, or el's own): the caller's fixed
-  // dt, else 0.9 × the auto step of that state (with respa_k > 1, of the smaller of it and the
-  // slow forces' safe outer step ÷ respa_k).
+  // A system of the job's models on `el` (bonds at rest as in `rest`, or el's own) at the auto
+  // step, initialized: for picking and checking steps.
+  std::unique_ptr<System> probe(const Elements& el, const ParallelBond* rest) const;
+  // The job's own step for a system on `el`: 0.9 × the auto step of that state (with
+  // respa_k > 1, of the smaller of it and the slow forces' safe outer step ÷ respa_k).
   double pick_dt(const Elements& el, const ParallelBond* rest) const;
+  // The step of the stages after a pre-relaxation: the caller's dt (checked_given_dt), else
+  // pick_dt.
+  double step_after_prerelax(const Elements& el, const ParallelBond* rest) const;
+  // The caller's dt if it is within safety × the critical step of a system on `el`: the
+  // automatic step's bound, or where that is too low, the measured 2/ω_max (largest_frequency,
+  // with the dashpots' damping, Ritz value plus residual); with respa_k > 1 the outer step within
+  // the slow forces' bound. Else throws ConfigError naming dt, the limit and the critical step.
+  double checked_given_dt(const Elements& el, const ParallelBond* rest) const;
   // sys_ replaced by a new system on `el` at step dt (bonds at rest as in `rest`).
   void rebuild(Elements el, double dt, const ParallelBond* rest);
 
@@ -242,7 +257,7 @@ class TensileJob final : public Job {
   DepositStage* deposit_ = nullptr;          // owned by the stage list; null without one
   PrerelaxStage* prerelax_stage_ = nullptr;  // likewise, never null after build
   PrerelaxStage* np_stage_ = nullptr;        // null without a deposit
-  bool auto_dt_ = true;                      // the caller gave no dt: the job picks it
+  std::optional<double> given_dt_;           // ps, the caller's step for relaxation and test
   double dt_start_ = 0;                      // ps, the pre-relaxation's step
   std::size_t prerelax_index_ = 0, relax_index_ = 0, deposit_index_ = 0, np_prerelax_index_ = 0,
               test_index_ = 0;  // stage positions (npos-like: stages().size() when absent)
