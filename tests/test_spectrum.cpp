@@ -20,6 +20,7 @@
 #include "mdem/force/contact/linear_contact.h"
 #include "mdem/force/contact/np_cnt_contact.h"
 #include "mdem/force/contact/np_np_contact.h"
+#include "mdem/force/damping/viscous_contact_damping.h"
 #include "mdem/integrate/spectrum.h"
 #include "mdem/integrate/system.h"
 #include "mdem/scene/grain.h"
@@ -180,6 +181,39 @@ System crossed_pair(double R) {
   sys.add(std::make_unique<AnisotropicVdw>());
   sys.initialize();
   return sys;
+}
+
+TEST(Spectrum, DampedCriticalStepIsLoweredByTheLargestElementsDashpots) {
+  // System::damped_critical_dt(ω) = (2/ω)(√(1+ζ²) − ζ), the damped oscillator's limit under
+  // velocity Verlet, with the largest element's ζ = Σc/(m ω): what the tensile job checks a
+  // caller's step against after measuring ω. Two segments of two tubes crossed 1.5 nm apart with
+  // a dashpot of ratio ψ: c = 2ψ√(m_eff k), m_eff = m/2 (thesis Eq. 33–34); a third segment out
+  // of reach (20 nm) has no dashpot.
+  Elements el;
+  add_straight_tube(el, Vec3::Zero(), Vec3::UnitX(), 1, 0);
+  add_straight_tube(el, Vec3(0, 0, 1.5), Vec3::UnitY(), 1, 1);
+  add_straight_tube(el, Vec3(0, 0, 20.0), Vec3::UnitX(), 1, 2);
+  const double omega = 12.5;  // rad/ps
+  {
+    System bare(el, one_thread());
+    bare.add(std::make_unique<AnisotropicVdw>());
+    bare.initialize();
+    EXPECT_EQ(bare.damped_critical_dt(omega), 2.0 / omega);
+  }
+  ContactDampingParams dp;
+  dp.ratio = 0.3;
+  System sys(std::move(el), one_thread());
+  sys.add(std::make_unique<AnisotropicVdw>());
+  sys.add(std::make_unique<ViscousContactDamping>(dp));
+  sys.initialize();
+  const double c = 2.0 * 0.3 * std::sqrt(0.5 * cnt::kMass * 100.0);
+  const double zeta = c / (cnt::kMass * omega);
+  EXPECT_NEAR(sys.damped_critical_dt(omega), 2.0 / omega * (std::sqrt(1.0 + zeta * zeta) - zeta),
+              1e-15);
+  EXPECT_LT(sys.damped_critical_dt(omega), 2.0 / omega);
+  EXPECT_EQ(sys.damped_critical_dt(0.0), std::numeric_limits<double>::infinity());
+  EXPECT_EQ(sys.damped_critical_dt(-1.0), std::numeric_limits<double>::infinity());
+  EXPECT_THROW(sys.damped_critical_dt(std::nan("")), std::invalid_argument);
 }
 
 TEST(Spectrum, AForceThatJumpsIsReportedNotTakenForAStiffness) {

@@ -463,6 +463,39 @@ TEST(TensileJob, GivenStepIsCheckedAgainstTheMeasuredCriticalStep) {
   EXPECT_EQ(refused.stage_index(), 0u);
 }
 
+TEST(TensileJob, GivenStepRunsTheTestAfterAnNpDeposit) {
+  // NPs deposited after the relaxation: the job rebuilds its system with them at its own step to
+  // see whether they overlap; when they do not (here: the placement keeps clear of the tubes),
+  // the test follows at once, rebuilt at the caller's step, on bonds that keep the generated
+  // film's rest state. (The second rebuild first read the rest state from the bond model the
+  // first had replaced: a medium-film run crashed there. With an overlap, the NP pre-relaxation
+  // runs and the step after it is that of the first pre-relaxation's path, tested above.)
+  TensileJobSpec spec = tiny_spec();
+  spec.film.tubes = 16;
+  spec.film.segments_per_tube = 40;
+  spec.seed = 21;
+  spec.relax_ps = 2;
+  spec.nanoparticles = 3;
+  IntegratorSettings fixed = one_thread();
+  fixed.dt = 0.004;
+  TensileJob generated(spec, one_thread());
+  TensileJob job(spec, fixed);
+  const RunLog log = run(job);
+  EXPECT_EQ(log.stages,
+            (std::vector<std::string>{"prerelax", "relax", "deposit", "np_prerelax", "tensile"}));
+  EXPECT_FALSE(job.np_prerelax_record().ran);
+  EXPECT_EQ(job.system().dt(), 0.004);
+  EXPECT_EQ(num(job.summary(), "nanoparticles"), 3);
+  const auto& rest = generated.system().find<ParallelBond>()->bonds();
+  const auto& now = job.system().find<ParallelBond>()->bonds();
+  ASSERT_EQ(now.size(), rest.size());
+  for (std::size_t b = 0; b < rest.size(); ++b) {
+    ASSERT_EQ(now[b].ci, rest[b].ci) << b;
+    ASSERT_EQ(now[b].cj, rest[b].cj) << b;
+    ASSERT_EQ(now[b].q_rel0.coeffs(), rest[b].q_rel0.coeffs()) << b;
+  }
+}
+
 TEST(TensileJob, AutoStepKeepsTheOuterStepWithinTheSlowForcesLimit) {
   // With multiple time stepping the job's auto step keeps respa_k·dt within safety × the slow
   // forces' (vdW, dashpots) critical step. Before, only the inner step was picked, and a

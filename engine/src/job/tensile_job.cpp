@@ -803,15 +803,17 @@ void TensileJob::stage_finished(std::size_t k) {
     // the generated film's rest state, at a step picked for it (NPs may overlap tubes).
     Elements el = sys.elements();
     for (const Vec3& x : deposit_->positions) el.add(nanoparticle(x));
-    const ParallelBond* rest = sys.find<ParallelBond>();
-    if (!deposit_->decided) deposit_->dt = pick_dt(el, rest);
-    rebuild(el, deposit_->dt, rest);
+    // (rebuild() replaces the system, and with it the bonds: `sys` and its bond model are not
+    // to be used after it; the new system's bonds keep the same rest state.)
+    if (!deposit_->decided) deposit_->dt = pick_dt(el, sys.find<ParallelBond>());
+    rebuild(el, deposit_->dt, sys.find<ParallelBond>());
     sys_->initialize();
     if (!deposit_->decided) {
       deposit_->overlaps = !np_prerelax_->measure(*sys_).overlap_free;
       deposit_->decided = true;
       // No NP pre-relaxation: the test follows on this film, at the caller's step if given.
       if (!deposit_->overlaps && given_dt_) {
+        const ParallelBond* rest = sys_->find<ParallelBond>();
         deposit_->dt = checked_given_dt(el, rest);
         rebuild(std::move(el), deposit_->dt, rest);
         sys_->initialize();
