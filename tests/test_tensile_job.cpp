@@ -42,6 +42,15 @@ TensileJobSpec tiny_spec() {
   return s;
 }
 
+// A film with overlapping crossings: 16 tubes of 40 segments on 60 nm (test_tensile_film's).
+TensileJobSpec crossing_spec() {
+  TensileJobSpec s = tiny_spec();
+  s.film.tubes = 16;
+  s.film.segments_per_tube = 40;
+  s.seed = 21;
+  return s;
+}
+
 IntegratorSettings one_thread() {
   IntegratorSettings is;
   is.threads = 1;
@@ -341,10 +350,7 @@ TEST(TensileJob, StepIsPickedAnewAfterEachPreRelaxation) {
   // is longer and the job takes 0.9 of its auto step from there on (tensile_job.h). A film with
   // overlapping crossings: 16 tubes of 40 segments on 60 nm (test_tensile_film's), pre-relaxed
   // for up to 5 ps, with 3 NPs deposited after a 2 ps relaxation.
-  TensileJobSpec spec = tiny_spec();
-  spec.film.tubes = 16;
-  spec.film.segments_per_tube = 40;
-  spec.seed = 21;
+  TensileJobSpec spec = crossing_spec();
   spec.prerelax.max_time = 5;
   spec.relax_ps = 2;
   spec.nanoparticles = 3;
@@ -385,10 +391,7 @@ TEST(TensileJob, GivenStepIsCheckedAgainstTheMeasuredCriticalStep) {
   // A caller's dt above safety × the automatic step's bound (a Gershgorin bound, up to 2x below
   // the true limit on films) is checked against the film's true critical step, measured, rather
   // than refused: the thesis's 30 fs on the medium film. The 16-tube film of the test above.
-  TensileJobSpec spec = tiny_spec();
-  spec.film.tubes = 16;
-  spec.film.segments_per_tube = 40;
-  spec.seed = 21;
+  TensileJobSpec spec = crossing_spec();
   spec.relax_ps = 3;
   // The pre-relaxed film (one thread: the same state in every run) as the relaxation starts:
   // its automatic bound (the job's step is 0.9 × safety × it) and its true critical step,
@@ -470,10 +473,7 @@ TEST(TensileJob, GivenStepRunsTheTestAfterAnNpDeposit) {
   // film's rest state. (The second rebuild first read the rest state from the bond model the
   // first had replaced: a medium-film run crashed there. With an overlap, the NP pre-relaxation
   // runs and the step after it is that of the first pre-relaxation's path, tested above.)
-  TensileJobSpec spec = tiny_spec();
-  spec.film.tubes = 16;
-  spec.film.segments_per_tube = 40;
-  spec.seed = 21;
+  TensileJobSpec spec = crossing_spec();
   spec.relax_ps = 2;
   spec.nanoparticles = 3;
   IntegratorSettings fixed = one_thread();
@@ -502,10 +502,7 @@ TEST(TensileJob, AutoStepKeepsTheOuterStepWithinTheSlowForcesLimit) {
   // 100 nm film at respa_k = 4 stopped on the run guard after its pre-relaxation ("the outer step
   // respa_k x dt is above the slow forces' safe limit"). On a film with crossings in contact
   // (the 16-tube film above) the cap binds at respa_k = 4.
-  TensileJobSpec spec = tiny_spec();
-  spec.film.tubes = 16;
-  spec.film.segments_per_tube = 40;
-  spec.seed = 21;
+  TensileJobSpec spec = crossing_spec();
   IntegratorSettings is = one_thread();
   is.respa_k = 4;
   TensileJob job(spec, is);
