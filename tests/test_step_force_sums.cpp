@@ -135,3 +135,73 @@ TEST(StepForceSums, DashpotsWithoutTorquesLeaveTheDampingTorquesZero) {
     EXPECT_GT(sys.energy().dissipated, 0.0);
   }
 }
+
+namespace {
+
+// Every bit of the forces, torques and damping forces and torques the system holds, in one
+// running hash (FNV-1a over the doubles' bits).
+std::uint64_t force_hash(const System& sys) {
+  std::uint64_t h = 1469598103934665603ull;
+  auto add = [&](const std::vector<Vec3>& a) {
+    for (const Vec3& v : a)
+      for (int k = 0; k < 3; ++k) h = (h ^ bits(v[k])) * 1099511628211ull;
+  };
+  add(sys.elements().f);
+  add(sys.elements().t);
+  add(sys.damping_forces());
+  add(sys.damping_torques());
+  return h;
+}
+
+// Records force_hash at every call; says whether it reads forces as it is told.
+class ForceRecorder final : public Updater {
+ public:
+  explicit ForceRecorder(bool reads) : reads_(reads) {}
+  void apply(System& sys, double) override { seen.push_back(force_hash(sys)); }
+  bool reads_forces() const override { return reads_; }
+  std::vector<std::uint64_t> seen;
+
+ private:
+  bool reads_;
+};
+
+}  // namespace
+
+TEST(StepForceSums, AnUpdaterThatReadsForcesSeesEachStepsOwn) {
+  // A run's fused passes keep the forces they kick with in registers when no updater reads them
+  // (Updater::reads_forces): an updater that does must see, before each evaluation, the forces
+  // of the one before, as it does when every step is a run's last (run(1), whose last step
+  // always stores them). With local damping on (it writes fd, td in the pass), with and without
+  // dashpots; 2 threads. The trajectory must not depend on it either.
+  for (bool dashpots : {false, true}) {
+    auto film_run = [&](bool reads, bool one_at_a_time) {
+      System sys = film(2, dashpots);
+      sys.set_local_damping(0.2);
+      auto rec = std::make_shared<ForceRecorder>(reads);
+      sys.add_updater(rec);
+      sys.initialize();
+      rec->seen.clear();
+      if (one_at_a_time)
+        for (int k = 0; k < 24; ++k) sys.run(1);
+      else
+        sys.run(24);
+      return std::pair{std::move(rec->seen), sys.elements()};
+    };
+    const auto [stepwise, e1] = film_run(true, true);
+    const auto [reader, e2] = film_run(true, false);
+    const auto [blind, e3] = film_run(false, false);
+    ASSERT_EQ(stepwise.size(), 24u);
+    EXPECT_EQ(reader, stepwise) << "dashpots " << dashpots;
+    // The updater that says it does not read them sees old forces at some steps (else the
+    // fused passes stored them anyway and nothing was spared).
+    long stale = 0;
+    for (std::size_t k = 0; k < blind.size(); ++k) stale += blind[k] != stepwise[k];
+    EXPECT_GT(stale, 0) << "dashpots " << dashpots;
+    long differing = 0;
+    for (std::size_t i = 0; i < e1.size(); ++i)
+      for (int k = 0; k < 3; ++k)
+        differing += bits(e1.x[i][k]) != bits(e2.x[i][k]) || bits(e1.x[i][k]) != bits(e3.x[i][k]) ||
+                     bits(e1.v[i][k]) != bits(e3.v[i][k]) || bits(e1.f[i][k]) != bits(e3.f[i][k]);
+    EXPECT_EQ(differing, 0) << "dashpots " << dashpots;
+  }
+}

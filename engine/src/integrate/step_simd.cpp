@@ -157,11 +157,15 @@ HWY_INLINE bool chunk(const Pass& p, long i, double* s2, double* s1, long* runaw
   const int nt = p.sink_threads;
   const V3 f = sink ? thread_sum(p.sink_f, nt, i) : load3(p.f, i);
   const V3 t = sink ? thread_sum(p.sink_t, nt, i) : load3(p.t, i);
-  V3 fd = sink_damp ? thread_sum(p.sink_fd, nt, i) : load3(p.fd, i);
-  V3 td = !sink_damp             ? load3(p.td, i)
-          : p.sink_td != nullptr ? thread_sum(p.sink_td, nt, i)
-                                 : V3{zero, zero, zero};
   const bool damped = kSecond && p.alpha > 0;
+  // Local damping without model dampers starts fd, td from zero: not loaded then.
+  const bool fd_from_zero = damped && !p.model_damping;
+  V3 fd = sink_damp      ? thread_sum(p.sink_fd, nt, i)
+          : fd_from_zero ? V3{zero, zero, zero}
+                         : load3(p.fd, i);
+  V3 td = sink_damp ? (p.sink_td != nullptr ? thread_sum(p.sink_td, nt, i) : V3{zero, zero, zero})
+          : fd_from_zero ? V3{zero, zero, zero}
+                         : load3(p.td, i);
   Terms t2, t1;
   V kt = zero, kr = zero;
   if constexpr (kSecond) {
@@ -220,7 +224,8 @@ HWY_INLINE bool chunk(const Pass& p, long i, double* s2, double* s1, long* runaw
     qz = qz * g;
     qw = qw * g;
   }
-  // The chunk is good: write it.
+  // The chunk is good: write it (the forces only where they are kept, Pass::keep_forces).
+  const bool keep = !(kSecond && kFirst) || p.keep_forces;
   if (sink) {
     for (int k = 0; k < p.sink_threads; ++k) {
       zero3(p.sink_f[k], i);
@@ -228,10 +233,12 @@ HWY_INLINE bool chunk(const Pass& p, long i, double* s2, double* s1, long* runaw
       if (sink_damp) zero3(p.sink_fd[k], i);
       if (sink_damp && p.sink_td != nullptr) zero3(p.sink_td[k], i);
     }
-    store3(f, p.f, i);
-    store3(t, p.t, i);
+    if (keep) {
+      store3(f, p.f, i);
+      store3(t, p.t, i);
+    }
   }
-  if (sink_damp || damped) {
+  if ((sink_damp || damped) && keep) {
     store3(fd, p.fd, i);
     store3(td, p.td, i);
   }

@@ -259,6 +259,8 @@ class TensileJob::RelaxTracker final : public Updater {
     std::sort(times_.begin(), times_.end());
     times_.erase(std::unique(times_.begin(), times_.end()), times_.end());
   }
+  // Positions, the bonds' energies and forces (their own state): not the elements' forces.
+  bool reads_forces() const override { return false; }
   void apply(System& sys, double t) override {
     const double tol = 0.5 * sys.dt();
     while (next_report_ < times_.size() && t >= times_[next_report_] - tol) {
@@ -313,6 +315,8 @@ class TensileJob::TestTracker final : public Updater {
     std::sort(strains_.begin(), strains_.end());
   }
 
+  // Positions and the bonds' own state: not the elements' forces.
+  bool reads_forces() const override { return false; }
   void apply(System& sys, double t) override {
     const TensileProtocol& p = *job_.protocol_;
     if (!p.started()) return;
