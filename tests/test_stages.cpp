@@ -19,6 +19,7 @@
 #include "mdem/job/compression_job.h"
 #include "mdem/job/stage.h"
 #include "mdem/scene/bundle_scene.h"
+#include "mdem/scene/film_builder.h"
 #include "mdem/scene/grain_packing.h"
 
 namespace mdem {
@@ -520,6 +521,89 @@ TEST(Stages, BundleJobConservesEnergyAndResumes) {
   BundleJobSpec bad = spec;
   bad.steps = 0;
   EXPECT_THROW(BundleJob(bad, st), std::invalid_argument);
+}
+
+
+// ---- chunks of a large system's steps ----
+
+// 30 000 CNT segments in free flight (no force model, so a step is only the integrator's pass):
+// above 25 000 elements the job runner's 50 000 element-step budget between two polls of
+// cancellation is one step.
+class FreeFlight final : public Job {
+ public:
+  explicit FreeFlight(long steps) : sys_(film(), settings()) {
+    SystemStage::Settings s;
+    s.stop = StopCondition::after_steps(steps);
+    add_stage(std::make_unique<SystemStage>("flight", *this, std::move(s)));
+  }
+  static Elements film() {
+    FilmSpec f;
+    f.side = 300;
+    f.thickness = 10;
+    f.tubes = 300;
+    f.segments_per_tube = 100;
+    f.seed = 7;
+    Elements el;
+    add_random_film(el, f);
+    for (std::size_t i = 0; i < el.size(); ++i) {
+      const double k = static_cast<double>(i % 97) - 48;
+      el.v[i] = Vec3(0.001 * k, -0.002 * k, 0.0005 * k);
+      el.w[i] = Vec3(0.003 * k, 0.001 * k, -0.002 * k);
+    }
+    return el;
+  }
+  static IntegratorSettings settings() {
+    IntegratorSettings s = two_threads(0.0);
+    s.dt = 0.002;
+    return s;
+  }
+  std::string_view kind() const override { return "free-flight"; }
+  System& system() override { return sys_; }
+  double duration() const override { return 0; }
+  std::vector<std::string> columns() const override { return energy_columns({}); }
+  std::vector<double> observe() override { return energy_values(sys_, {}); }
+  Summary summary() override { return {}; }
+
+ private:
+  System sys_;
+};
+
+TEST(Stages, ALargeSystemRunsChunksOfSeveralStepsWithTheSameResults) {
+  // One-step chunks would run every step of a large film as a run's last, whose passes over the
+  // elements are not fused (6 % of the dense film's step): the runner takes as many steps per
+  // chunk as ran in ~0.1 s, up to 64, and up to the next progress report (every 0.5 % of the
+  // stage: 10 steps here). A step here costs ~0.3 ms, so chunks of several steps (at a step of
+  // 0.05 s, 150 times slower, they would be one step again). The results are those of one
+  // System::run of all the steps, bit for bit, and a cancel still stops at a chunk's end.
+  const long steps = 2000;
+  FreeFlight job(steps);
+  ASSERT_GT(job.system().elements().size(), 25000u);
+  std::vector<long> polls;
+  JobObserver obs;
+  obs.checkpoint = [&](long step) { polls.push_back(step); };
+  EXPECT_EQ(run_job(job, {0.0, 0.0}, obs).steps, steps);
+  ASSERT_FALSE(polls.empty());
+  EXPECT_EQ(polls.back(), steps);
+  long longest = 0;
+  for (std::size_t k = 1; k < polls.size(); ++k)
+    longest = std::max(longest, polls[k] - polls[k - 1]);
+  EXPECT_EQ(longest, 10) << polls.size() << " chunks";
+
+  System alone(FreeFlight::film(), FreeFlight::settings());
+  alone.initialize();
+  alone.run(steps);
+  EXPECT_TRUE(same_bits(job.system().elements().x, alone.elements().x));
+  EXPECT_TRUE(same_bits(job.system().elements().q, alone.elements().q));
+
+  FreeFlight cancelled(steps);
+  long at = -1;
+  JobObserver stop;
+  stop.checkpoint = [&](long step) { at = step; };
+  stop.cancelled = [&] { return at >= 100; };
+  const JobRunResult r = run_job(cancelled, {0.0, 0.0}, stop);
+  EXPECT_TRUE(r.cancelled);
+  EXPECT_EQ(r.steps, at);
+  EXPECT_LE(at, 110);
 }
 
 }  // namespace
