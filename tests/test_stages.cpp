@@ -523,7 +523,6 @@ TEST(Stages, BundleJobConservesEnergyAndResumes) {
   EXPECT_THROW(BundleJob(bad, st), std::invalid_argument);
 }
 
-
 // ---- chunks of a large system's steps ----
 
 // 30 000 CNT segments in free flight (no force model, so a step is only the integrator's pass):
