@@ -31,7 +31,7 @@ namespace {
 // A chunk of a large system's steps between two polls of cancellation (run_job): about this
 // long, and at most this many steps.
 constexpr double kChunkSeconds = 0.1;
-constexpr long kTimedChunkSteps = 64;
+constexpr double kTimedChunkSteps = 64;
 
 long steps_for(double every_ps, double dt) {
   return every_ps > 0 ? std::max(1L, std::lround(every_ps / dt)) : 0;
@@ -265,11 +265,10 @@ JobRunResult run_job(Job& job, const JobCadence& cadence, const JobObserver& obs
           std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
       const long before = step;
       step = sys.steps();
-      if (step > before && took > 0)
-        max_chunk = std::max(
-            budget_chunk,
-            std::min(kTimedChunkSteps,
-                     static_cast<long>(kChunkSeconds * static_cast<double>(step - before) / took)));
+      if (step > before && took > 0) {
+        const double fit = kChunkSeconds * static_cast<double>(step - before) / took;
+        max_chunk = std::max(budget_chunk, static_cast<long>(std::min(kTimedChunkSteps, fit)));
+      }
       report(step, before, st->finished());
       if (obs.checkpoint) obs.checkpoint(series_step(job));
     }
