@@ -532,10 +532,6 @@ void System::run(long nsteps) {
   const long lanes = static_cast<long>(step_simd::lanes());
   auto context = [&] { return step::StepContext{&E, fd_.data(), td_.data(), dt, h}; };
   long runaway = -1;
-  // Whether an updater reads the forces between steps (else the fused passes keep them in
-  // registers: step_simd::Pass::keep_forces).
-  const bool forces_read = std::any_of(updaters_.begin(), updaters_.end(),
-                                       [](const auto& u) { return u->reads_forces(); });
   // Each element's arithmetic is that of velocity Verlet, in one pass over the elements per step
   // (plus the force evaluation's own): pass 2 of step n and pass 1 of step n+1 run in one loop,
   // element by element (each reads and writes its own element only), except at the last step of
@@ -614,7 +610,10 @@ void System::run(long nsteps) {
     // Lanes take pass 2 unless multiple time stepping's held forces enter local damping.
     const bool lanes2 = fast && !(c2.alpha > 0 && c2.net);
     step_simd::Pass p2 = lanes_pass(c2, true, fuse, sink_buffers_);
-    p2.keep_forces = forces_read;
+    // Whether an updater's next apply() reads the forces this pass takes (else a fused pass
+    // keeps them in registers: step_simd::Pass::keep_forces).
+    p2.keep_forces = std::any_of(updaters_.begin(), updaters_.end(),
+                                 [](const auto& u) { return u->reads_forces(); });
     if (fuse) {
       const auto marks =
           ordered_sums<6>(n, partial_sums_, {&work, &diss, &kt, &kr, &work_next, &diss_next},

@@ -53,7 +53,7 @@ GripStressSampler::GripStressSampler(std::function<double(double)> strain, GripS
 void GripStressSampler::apply(System& sys, double t) {
   if (!have_prev_) {
     next_ = t;
-  } else if (prev_t_ >= next_ - 1e-9 * s_.every) {
+  } else if (due()) {
     const Elements& el = sys.elements();
     const GripForces f =
         grip_forces(sys, el.group_indices(s_.left_group), el.group_indices(s_.right_group));
@@ -64,6 +64,9 @@ void GripStressSampler::apply(System& sys, double t) {
   have_prev_ = true;
   prev_t_ = t;
 }
+
+bool GripStressSampler::due() const { return have_prev_ && prev_t_ >= next_ - 1e-9 * s_.every; }
+bool GripStressSampler::reads_forces() const { return due(); }
 
 std::vector<double> GripStressSampler::times() const {
   std::vector<double> v;

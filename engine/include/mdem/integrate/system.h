@@ -38,11 +38,13 @@ class Updater : public Stateful, public ElementIndexHolder {
   // Why element i ran away, when this updater's load explains it (e.g. an applied moment that
   // nothing resists any more); empty when it does not. The run guard says it instead of blaming dt.
   virtual std::string explain_runaway(const System& /*sys*/, std::size_t /*i*/) const { return {}; }
-  // Whether apply() reads the elements' forces or torques (Elements::f, t, or the system's
-  // damping_forces(), damping_torques()). When no updater of a run does, the run's passes that
-  // kick with a step's forces and drift into the next step keep them in registers and store them
-  // only at the run's last step and the energy guard's steps (System::run): an updater that says
-  // false sees forces one or more steps old. True (always fresh) unless an updater says otherwise.
+  // Whether the next apply() reads the elements' forces or torques (Elements::f, t, or the
+  // system's damping_forces(), damping_torques()). Asked at every step of a run, after the
+  // updaters applied and before the pass that stores the forces the next apply() sees: when no
+  // updater says true, that pass (which kicks with them and drifts into the next step) keeps them
+  // in registers; the run's last step and the energy guard's steps store them always (System::
+  // run). An updater whose next apply() reads them after saying false sees forces one or more
+  // steps old. True (always fresh) unless an updater says otherwise.
   virtual bool reads_forces() const { return true; }
   void save_state(StateWriter&) const override {}
   void load_state(StateReader&) override {}

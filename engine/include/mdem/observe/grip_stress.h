@@ -62,6 +62,8 @@ class GripStressSampler final : public Updater {
   // names.
   GripStressSampler(std::function<double(double)> strain, GripStressSettings s);
   void apply(System& sys, double t) override;
+  // Only when the next call samples (the grips' forces of the evaluation made at this call).
+  bool reads_forces() const override;
 
   const std::vector<GripSample>& samples() const { return samples_; }
   // Columns of the series, for the stress–strain and cycle analyses.
@@ -78,6 +80,8 @@ class GripStressSampler final : public Updater {
   std::function<double(double)> strain_;
   GripStressSettings s_;
   std::vector<GripSample> samples_;
+  // Whether the next call samples (the evaluation made at the previous call's time is due).
+  bool due() const;
   bool have_prev_ = false;
   double prev_t_ = 0;
   double next_ = 0;  // next sampling time; set from the first call's time
