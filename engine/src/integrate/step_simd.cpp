@@ -158,19 +158,18 @@ HWY_INLINE bool chunk(const Pass& p, long i, double* s2, double* s1, long* runaw
   const V3 f = sink ? thread_sum(p.sink_f, nt, i) : load3(p.f, i);
   const V3 t = sink ? thread_sum(p.sink_t, nt, i) : load3(p.t, i);
   const bool damped = kSecond && p.alpha > 0;
-  // Local damping without model dampers starts fd, td from zero: not loaded then.
+  // Local damping without model dampers starts fd, td from zero (local_damping): not loaded.
   const bool fd_from_zero = damped && !p.model_damping;
-  V3 fd = sink_damp      ? thread_sum(p.sink_fd, nt, i)
-          : fd_from_zero ? V3{zero, zero, zero}
-                         : load3(p.fd, i);
-  V3 td = sink_damp ? (p.sink_td != nullptr ? thread_sum(p.sink_td, nt, i) : V3{zero, zero, zero})
-          : fd_from_zero ? V3{zero, zero, zero}
-                         : load3(p.td, i);
+  const V3 none{zero, zero, zero};
+  V3 fd = fd_from_zero ? none : sink_damp ? thread_sum(p.sink_fd, nt, i) : load3(p.fd, i);
+  V3 td = fd_from_zero           ? none
+          : !sink_damp           ? load3(p.td, i)
+          : p.sink_td != nullptr ? thread_sum(p.sink_td, nt, i)
+                                 : none;
   Terms t2, t1;
   V kt = zero, kr = zero;
   if constexpr (kSecond) {
     if (damped) {  // local_damping
-      if (!p.model_damping) fd = td = {zero, zero, zero};
       const V a = hn::Set(d, p.alpha);
       fd = {damp(f.x, fe.x, fd.x, v.x, a), damp(f.y, fe.y, fd.y, v.y, a),
             damp(f.z, fe.z, fd.z, v.z, a)};
