@@ -422,6 +422,17 @@ TEST(TensileJob, GivenStepIsCheckedAgainstTheMeasuredCriticalStep) {
       1e3 * automatic.system().dt(), automatic.system().energy_balance_error());
   EXPECT_NEAR(automatic.prerelax_record().dt_after_ps, 0.9 * 0.6 * bound, 1e-12);
   ASSERT_GT(critical, 1.2 * bound);  // films: 1.65-2.07 (docs/stability.md)
+  // The job reports the step it picked and the bound it picked it from; nothing measured.
+  const StepCheck& picked = automatic.step_check();
+  EXPECT_FALSE(picked.given);
+  EXPECT_EQ(picked.dt_ps, automatic.system().dt());
+  EXPECT_NEAR(picked.bound_ps, bound, 1e-12 * bound);
+  EXPECT_EQ(picked.measured_ps, 0);
+  const Summary ps = automatic.summary();
+  ASSERT_NE(find(ps, "step_origin"), nullptr);
+  EXPECT_EQ(std::get<std::string>(*find(ps, "step_origin")), "picked");
+  EXPECT_NEAR(num(ps, "step_over_bound"), 0.9 * 0.6, 1e-12);
+  EXPECT_EQ(find(ps, "step_critical_measured_ps"), nullptr);
 
   // Midway between the two safe limits: accepted, and the run at that step gives the results of
   // a run at a quarter of the bound's safe step (an unstable step would not; docs/stability.md's
@@ -434,10 +445,29 @@ TEST(TensileJob, GivenStepIsCheckedAgainstTheMeasuredCriticalStep) {
   run(accepted);
   EXPECT_EQ(accepted.system().dt(), *between.dt);
   EXPECT_EQ(accepted.prerelax_record().dt_after_ps, *between.dt);
+  // It reports the critical step it was checked against: the job's Lanczos (two starts to 1e-4,
+  // the larger Ritz value plus its residual) against this test's to 1e-8 on the same state.
+  const StepCheck& checked = accepted.step_check();
+  EXPECT_TRUE(checked.given);
+  EXPECT_EQ(checked.dt_ps, *between.dt);
+  EXPECT_NEAR(checked.bound_ps, bound, 1e-12 * bound);
+  EXPECT_NEAR(checked.measured_ps, critical, 0.01 * critical);
+  EXPECT_LE(checked.dt_ps, 0.6 * checked.measured_ps);
+  const Summary cs = accepted.summary();
+  ASSERT_NE(find(cs, "step_origin"), nullptr);
+  EXPECT_EQ(std::get<std::string>(*find(cs, "step_origin")), "given");
+  EXPECT_EQ(num(cs, "step_critical_measured_ps"), checked.measured_ps);
+  EXPECT_NEAR(num(cs, "step_over_measured"), *between.dt / checked.measured_ps, 1e-12);
+  EXPECT_GT(num(cs, "step_over_bound"), 0.6);  // the accuracy line's ratio, above the safety
   IntegratorSettings small = one_thread();
   small.dt = 0.25 * 0.6 * bound;
   TensileJob reference(spec, small);
   run(reference);
+  // Within safety × the bound: accepted without a measurement.
+  EXPECT_TRUE(reference.step_check().given);
+  EXPECT_EQ(reference.step_check().measured_ps, 0);
+  const Summary rs = reference.summary();
+  EXPECT_EQ(find(rs, "step_critical_measured_ps"), nullptr);
   const double peak = num(accepted.summary(), "peak_stress_GPa");
   const double peak_ref = num(reference.summary(), "peak_stress_GPa");
   const double balance = accepted.system().energy_balance_error();
@@ -485,6 +515,10 @@ TEST(TensileJob, GivenStepRunsTheTestAfterAnNpDeposit) {
             (std::vector<std::string>{"prerelax", "relax", "deposit", "np_prerelax", "tensile"}));
   EXPECT_FALSE(job.np_prerelax_record().ran);
   EXPECT_EQ(job.system().dt(), 0.004);
+  // The step check reported is the deposit's, of the film with its NPs.
+  EXPECT_TRUE(job.step_check().given);
+  EXPECT_EQ(job.step_check().dt_ps, 0.004);
+  EXPECT_NEAR(job.step_check().bound_ps, job.system().critical_dt(), 1e-12);
   EXPECT_EQ(num(job.summary(), "nanoparticles"), 3);
   const auto& rest = generated.system().find<ParallelBond>()->bonds();
   const auto& now = job.system().find<ParallelBond>()->bonds();
@@ -568,6 +602,63 @@ TEST(TensileJob, CheckpointOfAnotherJobOrTruncatedIsRefused) {
   // Truncated bytes.
   TensileJob same(s, one_thread());
   EXPECT_THROW(load_checkpoint(same, bytes.substr(0, bytes.size() / 2)), CheckpointError);
+}
+
+TEST(TensileJob, CheckpointWithABadStepCheckIsRefused) {
+  // The step check is restored from checkpoints (a resumed job does not measure again); a value
+  // that is not a finite step >= 0 there is refused, naming the field.
+  TensileJobSpec s = tiny_spec();
+  std::string bytes;
+  StepCheck check;
+  {
+    TensileJob first(s, one_thread());
+    bool stop = false;
+    run(
+        first, [&] { return stop; },
+        [&](long) {
+          if (!stop && first.current_stage()->name() == "relax") {
+            bytes = save_checkpoint(first);
+            check = first.step_check();
+            stop = true;
+          }
+        });
+  }
+  ASSERT_GT(check.dt_ps, 0);
+  ASSERT_GT(check.bound_ps, 0);
+  const std::size_t records = bytes.find("tensile records");
+  ASSERT_NE(records, std::string::npos);
+  // The n-th copy of a double's bytes after the records' tag, overwritten with v.
+  const auto patched = [&](double was, int nth, double v) {
+    const std::string key(reinterpret_cast<const char*>(&was), sizeof was);
+    std::size_t at = records;
+    for (int k = 0; k < nth; ++k) {
+      at = bytes.find(key, at + (k > 0 ? 1 : 0));
+      if (at == std::string::npos) {
+        ADD_FAILURE() << "no copy " << nth << " of " << was;
+        return bytes;
+      }
+    }
+    std::string b = bytes;
+    b.replace(at, sizeof v, reinterpret_cast<const char*>(&v), sizeof v);
+    return b;
+  };
+  const auto refused = [&](const std::string& b, const std::string& field) {
+    TensileJob job(s, one_thread());
+    try {
+      load_checkpoint(job, b);
+      ADD_FAILURE() << field << ": a bad value was loaded";
+    } catch (const CheckpointError& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  // The pre-relaxation's dt_after is the first copy of the step, the step check's the second.
+  refused(patched(check.dt_ps, 2, NAN), "step check dt");
+  refused(patched(check.dt_ps, 2, -check.dt_ps), "step check dt");
+  refused(patched(check.bound_ps, 1, INFINITY), "step check bound");
+  // Unpatched, the same bytes load.
+  TensileJob same(s, one_thread());
+  EXPECT_NO_THROW(load_checkpoint(same, bytes));
+  EXPECT_EQ(same.step_check().bound_ps, check.bound_ps);
 }
 
 TEST(TensileJob, SameSeedSameResultsOtherSeedOther) {

@@ -53,6 +53,26 @@ TEST(TensileReport, FractionsArePrintedInPercentTheJsonKeepsThem) {
   EXPECT_EQ(s["tubes_in_tension_at_2pct"].get<double>(), 0.722222);
 }
 
+TEST(TensileReport, AGivenStepReadsWithTheCriticalStepItWasCheckedAgainst) {
+  // A caller's dt above safety × the automatic bound, accepted against the measured critical
+  // step: both on one line, after the pre-relaxation's and before the relaxation's.
+  nlohmann::ordered_json s = {{"prerelax_reason", "converged"},
+                              {"step_origin", "given"},
+                              {"step_dt_ps", 0.03},
+                              {"step_critical_measured_ps", 0.049812},
+                              {"step_over_measured", 0.602265},
+                              {"step_bound_ps", 0.038504},
+                              {"step_over_bound", 0.779140},
+                              {"relax_ps", 4500.0}};
+  const auto lines = lines_of(s);
+  ASSERT_EQ(lines.size(), 3u) << joined(lines);
+  EXPECT_EQ(lines[0], "pre-relaxation: converged");
+  EXPECT_EQ(lines[1],
+            "step of the relaxation and test: given, dt 0.03 ps, measured critical step 0.04981 "
+            "ps, dt/measured 0.602, automatic bound 0.0385 ps, dt/bound 0.779");
+  EXPECT_EQ(lines[2], "relaxation 4500 ps");
+}
+
 TEST(TensileReport, CyclicFiguresOneLinePerCycleInOrder) {
   nlohmann::ordered_json s = {{"cycles_complete", 2}};
   for (int k = 1; k <= 2; ++k) {

@@ -222,6 +222,7 @@ void TensileJobSpec::validate() const {
 class TensileJob::Records final : public Stateful {
  public:
   PrerelaxRecord prerelax, np_prerelax;
+  StepCheck step;
   void save_state(StateWriter& w) const override {
     w.begin("tensile records");
     for (const PrerelaxRecord* p : {&prerelax, &np_prerelax}) {
@@ -231,6 +232,10 @@ class TensileJob::Records final : public Stateful {
       w.put(p->steps);
       w.put(p->dt_after_ps);
     }
+    w.put(step.dt_ps);
+    w.put(step.given);
+    w.put(step.bound_ps);
+    w.put(step.measured_ps);
   }
   void load_state(StateReader& r) override {
     r.begin("tensile records");
@@ -241,6 +246,15 @@ class TensileJob::Records final : public Stateful {
       p->steps = r.get<long>("prerelax steps");
       p->dt_after_ps = r.get<double>("prerelax dt after");
     }
+    const auto time = [&](const char* what) {
+      const double t = r.get<double>(what);
+      if (!(std::isfinite(t) && t >= 0)) r.fail(what, "finite and >= 0 ps");
+      return t;
+    };
+    step.dt_ps = time("step check dt");
+    step.given = r.get_bool("step check given");
+    step.bound_ps = time("step check bound");
+    step.measured_ps = time("step check measured");
   }
 };
 
@@ -638,7 +652,7 @@ std::unique_ptr<System> TensileJob::probe(const Elements& el, const ParallelBond
   return p;
 }
 
-double TensileJob::pick_dt(const Elements& el, const ParallelBond* rest) const {
+StepCheck TensileJob::pick_dt(const Elements& el, const ParallelBond* rest) const {
   const auto probe = this->probe(el, rest);
   // With multiple time stepping the outer step respa_k·dt must also stay within safety × the
   // slow forces' own critical step (System::initialize refuses a given dt beyond it; the job
@@ -646,16 +660,22 @@ double TensileJob::pick_dt(const Elements& el, const ParallelBond* rest) const {
   double dt = probe->dt();
   if (settings_.respa_k > 1)
     dt = std::min(dt, settings_.safety * probe->critical_outer_dt() / settings_.respa_k);
-  return kAutoDtFactor * dt;
+  StepCheck c;
+  c.dt_ps = kAutoDtFactor * dt;
+  c.bound_ps = probe->critical_dt();
+  return c;
 }
 
-double TensileJob::step_after_prerelax(const Elements& el, const ParallelBond* rest) const {
+StepCheck TensileJob::step_after_prerelax(const Elements& el, const ParallelBond* rest) const {
   return given_dt_ ? checked_given_dt(el, rest) : pick_dt(el, rest);
 }
 
-double TensileJob::checked_given_dt(const Elements& el, const ParallelBond* rest) const {
+StepCheck TensileJob::checked_given_dt(const Elements& el, const ParallelBond* rest) const {
   const double dt = *given_dt_, safety = settings_.safety;
   const auto probe = this->probe(el, rest);
+  StepCheck c;
+  c.dt_ps = dt;
+  c.given = true;
   const auto ps = [](double t) { return std::to_string(t) + " ps"; };
   if (settings_.respa_k > 1 && settings_.respa_k * dt > safety * probe->critical_outer_dt())
     throw ConfigError("tensile: the outer step respa_k x dt = " + ps(settings_.respa_k * dt) +
@@ -663,7 +683,8 @@ double TensileJob::checked_given_dt(const Elements& el, const ParallelBond* rest
                       ps(safety * probe->critical_outer_dt()) + " on the film the relaxation " +
                       "or test starts from: lower respa_k or dt, or use dt: auto");
   const double bound = probe->critical_dt();
-  if (dt <= safety * bound) return dt;
+  c.bound_ps = bound;
+  if (dt <= safety * bound) return c;
   // Above the automatic step's bound, which is up to 2x below the true limit on a relaxed film
   // (docs/stability.md): measure the true one, from two random starts that must agree (the top
   // of a film's spectrum is dense, and a Ritz value that met its tolerance early can be an
@@ -690,7 +711,8 @@ double TensileJob::checked_given_dt(const Elements& el, const ParallelBond* rest
                       (agree ? "not converged" : "not agreeing") +
                       "): lower dt below that limit, or use dt: auto");
   const double critical = probe->damped_critical_dt(omega);
-  if (dt <= safety * critical) return dt;
+  c.measured_ps = critical;
+  if (dt <= safety * critical) return c;
   throw ConfigError("tensile: time step dt = " + ps(dt) + " is above the safe limit " +
                     ps(safety * critical) + " of the film the relaxation or test starts from " +
                     "(safety " + std::to_string(safety) + " x its critical step " + ps(critical) +
@@ -713,7 +735,7 @@ void TensileJob::build(Elements el) {
   // step picked on the relaxed film would be refused.
   given_dt_ = settings_.dt;
   settings_.check_dt = false;
-  settings_.dt = pick_dt(el, nullptr);
+  settings_.dt = pick_dt(el, nullptr).dt_ps;
   dt_start_ = *settings_.dt;
   sys_ = tensile_film_system(std::move(el), settings_, spec_.dashpot_ratio, nullptr, spec_.laws);
 
@@ -797,7 +819,10 @@ void TensileJob::stage_finished(std::size_t k) {
       // whose step is picked anew: the overlaps that set the first step are gone.
       Elements el = sys.elements();
       zero_motion(el);
-      if (stage.dt_after == 0) stage.dt_after = step_after_prerelax(el, sys.find<ParallelBond>());
+      if (stage.dt_after == 0) {
+        records_->step = step_after_prerelax(el, sys.find<ParallelBond>());
+        stage.dt_after = records_->step.dt_ps;
+      }
       rebuild(std::move(el), stage.dt_after, sys.find<ParallelBond>());
       rec.dt_after_ps = stage.dt_after;
     }
@@ -809,7 +834,10 @@ void TensileJob::stage_finished(std::size_t k) {
     for (const Vec3& x : deposit_->positions) el.add(nanoparticle(x));
     // (rebuild() replaces the system, and with it the bonds: `sys` and its bond model are not
     // to be used after it; the new system's bonds keep the same rest state.)
-    if (!deposit_->decided) deposit_->dt = pick_dt(el, sys.find<ParallelBond>());
+    if (!deposit_->decided) {
+      records_->step = pick_dt(el, sys.find<ParallelBond>());
+      deposit_->dt = records_->step.dt_ps;
+    }
     rebuild(el, deposit_->dt, sys.find<ParallelBond>());
     sys_->initialize();
     if (!deposit_->decided) {
@@ -818,7 +846,8 @@ void TensileJob::stage_finished(std::size_t k) {
       // No NP pre-relaxation: the test follows on this film, at the caller's step if given.
       if (!deposit_->overlaps && given_dt_) {
         const ParallelBond* rest = sys_->find<ParallelBond>();
-        deposit_->dt = checked_given_dt(el, rest);
+        records_->step = checked_given_dt(el, rest);
+        deposit_->dt = records_->step.dt_ps;
         rebuild(std::move(el), deposit_->dt, rest);
         sys_->initialize();
       }
@@ -837,6 +866,7 @@ void TensileJob::stage_finished(std::size_t k) {
 
 const PrerelaxRecord& TensileJob::prerelax_record() const { return records_->prerelax; }
 const PrerelaxRecord& TensileJob::np_prerelax_record() const { return records_->np_prerelax; }
+const StepCheck& TensileJob::step_check() const { return records_->step; }
 const std::vector<RelaxFrame>& TensileJob::relax_frames() const { return relax_tracker_->frames; }
 const std::vector<StrainFrame>& TensileJob::strain_frames() const { return test_tracker_->frames; }
 
@@ -914,6 +944,18 @@ Summary TensileJob::summary() {
     s.emplace_back("np_candidates", deposit_->candidates);
     s.emplace_back("np_prerelax_reason", records_->np_prerelax.reason);
     s.emplace_back("np_prerelax_ps", records_->np_prerelax.duration_ps);
+  }
+  // The step of the relaxation and the test, and what it was checked against (the accuracy
+  // line's "x critical step" is over the automatic bound, which a given step may exceed).
+  if (const StepCheck& c = records_->step; c.dt_ps > 0) {
+    s.emplace_back("step_origin", std::string(c.given ? "given" : "picked"));
+    s.emplace_back("step_dt_ps", c.dt_ps);
+    if (c.measured_ps > 0) {
+      s.emplace_back("step_critical_measured_ps", c.measured_ps);
+      s.emplace_back("step_over_measured", c.dt_ps / c.measured_ps);
+    }
+    s.emplace_back("step_bound_ps", c.bound_ps);
+    s.emplace_back("step_over_bound", c.dt_ps / c.bound_ps);
   }
   s.emplace_back("relax_ps", spec_.relax_ps);
   if (auto ts = relax_stabilisation_ps()) s.emplace_back("relax_stabilisation_ps", *ts);

@@ -140,7 +140,8 @@ class StateReader {
 // 9: the over-twist check's books (per-tube work of the grip loads and kinetic energy, their
 // window).
 // 10: the tensile test's pieces held by both grips (count and affine modulus, at its start).
-inline constexpr std::uint32_t kCheckpointVersion = 10;
+// 11: the tensile job's step check (its step, given or picked, the bound, the measured step).
+inline constexpr std::uint32_t kCheckpointVersion = 11;
 
 // A part of a job that a run changes and a checkpoint must carry (a protocol, an observer, a
 // stage): it writes and reads its own state, so no job lists fields in a checkpoint by hand.

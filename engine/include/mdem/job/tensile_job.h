@@ -142,6 +142,18 @@ struct PrerelaxRecord {
   double dt_after_ps = 0;  // the step picked for the stages after it (0 when skipped)
 };
 
+// How the step of the relaxation and the test was set: the last check (after the pre-relaxation,
+// and again at an NP deposit and after the NPs' pre-relaxation), of the state the stages after it
+// start from.
+struct StepCheck {
+  double dt_ps = 0;     // the step (0: no check yet)
+  bool given = false;   // the caller's dt (else the job's own, pick_dt)
+  double bound_ps = 0;  // the automatic step's critical-step bound (System::critical_dt)
+  // The measured critical step (2/ω_max with the dashpots' damping, System::damped_critical_dt),
+  // which a given dt above safety × bound_ps was checked against; 0 when not measured.
+  double measured_ps = 0;
+};
+
 // The relaxation's records at relax_report_ps.
 struct RelaxFrame {
   double t = 0;  // ps since the relaxation's start
@@ -212,6 +224,7 @@ class TensileJob final : public Job {
   const GripStressSampler& stress_sampler() const { return *sampler_; }
   const PrerelaxRecord& prerelax_record() const;
   const PrerelaxRecord& np_prerelax_record() const;
+  const StepCheck& step_check() const;
   const std::vector<RelaxFrame>& relax_frames() const;
   const std::vector<StrainFrame>& strain_frames() const;
   // The relaxation's registry-free aligned-pair count every relax_count_every_ps, and its
@@ -232,15 +245,15 @@ class TensileJob final : public Job {
   std::unique_ptr<System> probe(const Elements& el, const ParallelBond* rest) const;
   // The job's own step for a system on `el`: 0.9 × the auto step of that state (with
   // respa_k > 1, of the smaller of it and the slow forces' safe outer step ÷ respa_k).
-  double pick_dt(const Elements& el, const ParallelBond* rest) const;
+  StepCheck pick_dt(const Elements& el, const ParallelBond* rest) const;
   // The step of the stages after a pre-relaxation: the caller's dt (checked_given_dt), else
   // pick_dt.
-  double step_after_prerelax(const Elements& el, const ParallelBond* rest) const;
+  StepCheck step_after_prerelax(const Elements& el, const ParallelBond* rest) const;
   // The caller's dt if it is within safety × the critical step of a system on `el`: the
   // automatic step's bound, or where that is too low, the measured 2/ω_max (largest_frequency,
   // with the dashpots' damping, Ritz value plus residual); with respa_k > 1 the outer step within
   // the slow forces' bound. Else throws ConfigError naming dt, the limit and the critical step.
-  double checked_given_dt(const Elements& el, const ParallelBond* rest) const;
+  StepCheck checked_given_dt(const Elements& el, const ParallelBond* rest) const;
   // sys_ replaced by a new system on `el` at step dt (bonds at rest as in `rest`).
   void rebuild(Elements el, double dt, const ParallelBond* rest);
 
