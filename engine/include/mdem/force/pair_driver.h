@@ -40,6 +40,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -491,18 +492,14 @@ class PairModel : public ForceModel {
     if (!pairs) throw std::logic_error(std::string(name()) + ": compute() needs a neighbour list");
     drive_pairs(k_, el, *pairs, sink, !list_is_for(*pairs, *this));
   }
-  // A kernel whose pairs are another kernel's names it as `using Owner = ...;` (the dashpot its
-  // contact's): with both batched on one cutoff and the list theirs, one pass does both.
+  // A kernel whose pairs are another kernel's names the kernels it can belong to as
+  // `using Owners = std::tuple<...>;` (a dashpot its contacts'): with this model's owner one of
+  // them, both batched on one cutoff and the list theirs, one pass does both.
   bool compute_with(const ForceModel& owner, const Elements& el, const NeighborList* pairs,
                     ForceSink& sink) const override {
-    if constexpr (requires { typename K::Owner; }) {
-      const auto* o = dynamic_cast<const PairModel<typename K::Owner>*>(&owner);
-      if (!o || !pairs || !active() || !o->active()) return false;
-      const auto& ok = o->kernel();
-      if (!k_.batched() || !ok.batched() || k_.cutoff() != ok.cutoff()) return false;
-      if (!list_is_for(*pairs, *this) || !list_is_for(*pairs, *o)) return false;
-      drive_pairs_fused(ok, k_, el, *pairs, sink);
-      return true;
+    if constexpr (requires { typename K::Owners; }) {
+      if (!pairs || !active() || owner.name() != pair_owner()) return false;
+      return fuse(owner, el, *pairs, sink, static_cast<typename K::Owners*>(nullptr));
     } else {
       return ForceModel::compute_with(owner, el, pairs, sink);
     }
@@ -524,6 +521,25 @@ class PairModel : public ForceModel {
 
  protected:
   K k_;
+
+ private:
+  // compute_with's pass with an owner whose kernel is one of O...
+  template <class... O>
+  bool fuse(const ForceModel& owner, const Elements& el, const NeighborList& pairs, ForceSink& sink,
+            std::tuple<O...>*) const {
+    return (fuse_as<O>(owner, el, pairs, sink) || ...);
+  }
+  template <class O>
+  bool fuse_as(const ForceModel& owner, const Elements& el, const NeighborList& pairs,
+               ForceSink& sink) const {
+    const auto* o = dynamic_cast<const PairModel<O>*>(&owner);
+    if (!o || !o->active()) return false;
+    const O& ok = o->kernel();
+    if (!k_.batched() || !ok.batched() || k_.cutoff() != ok.cutoff()) return false;
+    if (!list_is_for(pairs, *this) || !list_is_for(pairs, *o)) return false;
+    drive_pairs_fused(ok, k_, el, pairs, sink);
+    return true;
+  }
 };
 
 }  // namespace mdem

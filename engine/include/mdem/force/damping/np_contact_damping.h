@@ -17,6 +17,7 @@
 // equilibrium_stiffness(): 4.45 eV/nm² side-on NP–CNT, 555.9 NP–NP) are the alternative a user can
 // set in `stiffness` to make ψ the damping ratio of each pair's own small oscillation.
 #include <string_view>
+#include <tuple>
 
 #include "mdem/force/contact/np_cnt_contact.h"
 #include "mdem/force/contact/np_np_contact.h"
@@ -46,9 +47,8 @@ class NpDashpotKernel {
                   DashpotEvaluation e = DashpotEvaluation::Batched);
   std::string_view name() const { return name_; }
   std::string_view owner() const { return owner_; }
-  // The NP–CNT contact's dashpot runs in one pass with it (compute_with); the NP–NP contact's,
-  // whose owner is another kernel, is not paired and runs its own.
-  using Owner = NpCntKernel;
+  // Runs in one pass with its contact (compute_with), the NP–CNT's or the NP–NP's.
+  using Owners = std::tuple<NpCntKernel, NpNpKernel>;
   bool active() const { return p_.ratio != 0; }
   double cutoff() const { return p_.cutoff; }
   KindPairs kinds() const { return kinds_; }

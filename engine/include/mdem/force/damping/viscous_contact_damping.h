@@ -48,7 +48,7 @@ class ContactDampingKernel {
   std::string_view name() const { return "viscous_contact_damping"; }
   std::string_view owner() const { return "anisotropic_vdw"; }
   // Its pairs are the vdW contact's: the system evaluates both in one pass (compute_with).
-  using Owner = VdwKernel;
+  using Owners = std::tuple<VdwKernel>;
   bool active() const { return p_.ratio != 0; }
   double cutoff() const { return p_.cutoff; }
   KindPairs kinds() const {
