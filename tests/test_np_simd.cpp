@@ -457,13 +457,14 @@ TEST(NpDashpotSimd, FilmDampingForcesEqualTheScalarLaw) {
     }
 }
 
-// One pass over the NP–CNT contact's list for the contact and its dashpot gives, bit for bit, the
-// two passes one after the other; the NP–NP dashpot (another owner) is not fused with it.
-TEST(NpDashpotFused, OnePassWithTheNpCntContactEqualsTwoPasses) {
-  const Elements el = film_with_nps(11);
-  const NpCntContact contact;
+// One pass over a contact's list for the contact and its dashpot (made by `dashpot(shear)`) gives,
+// bit for bit, the two passes one after the other, on 1 and 2 threads, with and without shear;
+// `other` (another contact's dashpot) and a scalar dashpot are not fused with the contact.
+template <class Contact, class MakeDashpot>
+void expect_one_pass_equals_two(const Elements& el, const Contact& contact,
+                                MakeDashpot make_dashpot, const NpDashpotKernel& other) {
   for (bool shear : {false, true}) {
-    const NpContactDamping dashpot(np_cnt_dashpot(0.03, {}, 100.0, shear));
+    const NpContactDamping dashpot(make_dashpot(shear));
     ASSERT_EQ(contact.cutoff(), dashpot.cutoff());
     const NeighborList nl = list_of(contact, el);
     for (int threads : {1, 2}) {
@@ -477,21 +478,29 @@ TEST(NpDashpotFused, OnePassWithTheNpCntContactEqualsTwoPasses) {
       });
       ASSERT_TRUE(fused) << threads << " threads";
       EXPECT_NE(apart.energy, 0.0);
+      double damping = 0;
+      for (const Vec3& f : apart.fd) damping = std::max(damping, f.norm());
+      EXPECT_GT(damping, 0.0);
       EXPECT_TRUE(one == apart) << threads << " threads, shear " << shear;
     }
   }
-  const NpContactDamping np_np(np_np_dashpot());
-  const NpContactDamping scalar(scalar_of(np_cnt_dashpot()));
+  const NpContactDamping another(other);
+  const NpContactDamping scalar(scalar_of(make_dashpot(false)));
   const NeighborList nl = list_of(contact, el);
   ForceSink sink;
   sink.resize(el.size(), 1, true);
-  EXPECT_FALSE(np_np.compute_with(contact, el, &nl, sink));
+  EXPECT_FALSE(another.compute_with(contact, el, &nl, sink));
   EXPECT_FALSE(scalar.compute_with(contact, el, &nl, sink));
 }
 
+TEST(NpDashpotFused, OnePassWithTheNpCntContactEqualsTwoPasses) {
+  expect_one_pass_equals_two(
+      film_with_nps(11), NpCntContact{},
+      [](bool shear) { return np_cnt_dashpot(0.03, {}, 100.0, shear); }, np_np_dashpot());
+}
+
 // The same for the NP–NP contact and its dashpot, on NPs crowded enough for a team (from
-// 2 kParallelMinItems listed pairs, as the passes apart); neither the NP–CNT dashpot nor a scalar
-// one is fused with the NP–NP contact.
+// 2 kParallelMinItems listed pairs, as the passes apart).
 TEST(NpDashpotFused, OnePassWithTheNpNpContactEqualsTwoPasses) {
   Elements el = film_with_nps(23);
   std::mt19937_64 rng(29);
@@ -499,35 +508,10 @@ TEST(NpDashpotFused, OnePassWithTheNpNpContactEqualsTwoPasses) {
   for (int k = 0; k < 450; ++k) el.add(nanoparticle(Vec3(u(rng), u(rng), z(rng))));
   for (std::size_t i = 0; i < el.size(); ++i) el.v[i] = 2.0 * random_unit(rng);
   const NpNpContact contact;
-  for (bool shear : {false, true}) {
-    const NpContactDamping dashpot(np_np_dashpot(0.03, {}, 100.0, shear));
-    ASSERT_EQ(contact.cutoff(), dashpot.cutoff());
-    const NeighborList nl = list_of(contact, el);
-    ASSERT_GE(static_cast<long>(nl.pair_count()), 2 * kParallelMinItems);
-    for (int threads : {1, 2}) {
-      const Evaluation apart = evaluate_all(el.size(), threads, [&](ForceSink& s) {
-        contact.compute(el, &nl, s);
-        dashpot.compute(el, &nl, s);
-      });
-      bool fused = false;
-      const Evaluation one = evaluate_all(el.size(), threads, [&](ForceSink& s) {
-        fused = dashpot.compute_with(contact, el, &nl, s);
-      });
-      ASSERT_TRUE(fused) << threads << " threads";
-      EXPECT_NE(apart.energy, 0.0);
-      double scale = 0;
-      for (const Vec3& f : apart.fd) scale = std::max(scale, f.norm());
-      EXPECT_GT(scale, 0.0);
-      EXPECT_TRUE(one == apart) << threads << " threads, shear " << shear;
-    }
-  }
-  const NpContactDamping np_cnt(np_cnt_dashpot());
-  const NpContactDamping scalar(scalar_of(np_np_dashpot()));
-  const NeighborList nl = list_of(contact, el);
-  ForceSink sink;
-  sink.resize(el.size(), 1, true);
-  EXPECT_FALSE(np_cnt.compute_with(contact, el, &nl, sink));
-  EXPECT_FALSE(scalar.compute_with(contact, el, &nl, sink));
+  ASSERT_GE(static_cast<long>(list_of(contact, el).pair_count()), 2 * kParallelMinItems);
+  expect_one_pass_equals_two(
+      el, contact, [](bool shear) { return np_np_dashpot(0.03, {}, 100.0, shear); },
+      np_cnt_dashpot());
 }
 
 // A system pairs the NP–CNT dashpot with its contact, whichever was added first; its forces are

@@ -573,21 +573,26 @@ TEST(TensileJob, CyclicTestAfterARelaxationReportsEveryCycle) {
   }
 }
 
+// A checkpoint of a job of spec s at the relaxation's first step, and the job's step check there.
+std::string checkpoint_in_relax(const TensileJobSpec& s, StepCheck* check = nullptr) {
+  std::string bytes;
+  TensileJob first(s, one_thread());
+  bool stop = false;
+  run(
+      first, [&] { return stop; },
+      [&](long) {
+        if (!stop && first.current_stage()->name() == "relax") {
+          bytes = save_checkpoint(first);
+          if (check) *check = first.step_check();
+          stop = true;
+        }
+      });
+  return bytes;
+}
+
 TEST(TensileJob, CheckpointOfAnotherJobOrTruncatedIsRefused) {
   TensileJobSpec s = tiny_spec();
-  std::string bytes;
-  {
-    TensileJob first(s, one_thread());
-    bool stop = false;
-    run(
-        first, [&] { return stop; },
-        [&](long) {
-          if (!stop && first.current_stage()->name() == "relax") {
-            bytes = save_checkpoint(first);
-            stop = true;
-          }
-        });
-  }
+  const std::string bytes = checkpoint_in_relax(s);
   ASSERT_FALSE(bytes.empty());
   // Other stages (NPs deposited after relaxation add two).
   TensileJobSpec with_nps = s;
@@ -608,21 +613,8 @@ TEST(TensileJob, CheckpointWithABadStepCheckIsRefused) {
   // The step check is restored from checkpoints (a resumed job does not measure again); a value
   // that is not a finite step >= 0 there is refused, naming the field.
   TensileJobSpec s = tiny_spec();
-  std::string bytes;
   StepCheck check;
-  {
-    TensileJob first(s, one_thread());
-    bool stop = false;
-    run(
-        first, [&] { return stop; },
-        [&](long) {
-          if (!stop && first.current_stage()->name() == "relax") {
-            bytes = save_checkpoint(first);
-            check = first.step_check();
-            stop = true;
-          }
-        });
-  }
+  const std::string bytes = checkpoint_in_relax(s, &check);
   ASSERT_GT(check.dt_ps, 0);
   ASSERT_GT(check.bound_ps, 0);
   const std::size_t records = bytes.find("tensile records");
