@@ -244,7 +244,8 @@ class TensileJob final : public Job {
   // step, initialized: for picking and checking steps.
   std::unique_ptr<System> probe(const Elements& el, const ParallelBond* rest) const;
   // The job's own step for a system on `el`: 0.9 × the auto step of that state (with
-  // respa_k > 1, of the smaller of it and the slow forces' safe outer step ÷ respa_k).
+  // respa_k > 1, of the smaller of it and the slow forces' safe outer step ÷ respa_k), with the
+  // bound it was picked from.
   StepCheck pick_dt(const Elements& el, const ParallelBond* rest) const;
   // The step of the stages after a pre-relaxation: the caller's dt (checked_given_dt), else
   // pick_dt.
@@ -252,7 +253,8 @@ class TensileJob final : public Job {
   // The caller's dt if it is within safety × the critical step of a system on `el`: the
   // automatic step's bound, or where that is too low, the measured 2/ω_max (largest_frequency,
   // with the dashpots' damping, Ritz value plus residual); with respa_k > 1 the outer step within
-  // the slow forces' bound. Else throws ConfigError naming dt, the limit and the critical step.
+  // the slow forces' bound; with the bound and the measured step (if measured). Else throws
+  // ConfigError naming dt, the limit and the critical step.
   StepCheck checked_given_dt(const Elements& el, const ParallelBond* rest) const;
   // sys_ replaced by a new system on `el` at step dt (bonds at rest as in `rest`).
   void rebuild(Elements el, double dt, const ParallelBond* rest);
