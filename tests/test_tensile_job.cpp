@@ -496,6 +496,55 @@ TEST(TensileJob, GivenStepIsCheckedAgainstTheMeasuredCriticalStep) {
   EXPECT_EQ(refused.stage_index(), 0u);
 }
 
+TEST(TensileJob, GivenStepIsJudgedFromBothLanczosEstimates) {
+  // The verdict on a given step above safety × the bound, from two estimates of ω_max: ω = 50
+  // rad/ps (2/ω = 40 fs), a critical step of 0.9 × 2/ω (the dashpots' lowering, stood in for).
+  const auto damped = [](double omega) { return 0.9 * 2.0 / omega; };
+  SpectrumEstimate a;
+  a.omega_max = 50.0;
+  a.residual = 0.0;
+  a.converged = true;
+  SpectrumEstimate b = a;
+  b.omega_max = 49.7;  // within 1 %
+  // 20 fs against a bound of 30 fs (limit 18 fs) and a measured 36 fs (limit 21.6 fs): taken.
+  const StepCheck c = judge_given_step(0.020, 0.6, 0.030, a, b, damped);
+  EXPECT_TRUE(c.given);
+  EXPECT_EQ(c.dt_ps, 0.020);
+  EXPECT_EQ(c.bound_ps, 0.030);
+  EXPECT_NEAR(c.measured_ps, 0.9 * 2.0 / 50.0, 1e-15);
+  // The larger Ritz value plus its residual: ω² + 400 → ω = 53.85, critical 33.4 fs.
+  SpectrumEstimate r = b;
+  r.residual = 400.0;
+  EXPECT_NEAR(judge_given_step(0.020, 0.6, 0.030, a, r, damped).measured_ps,
+              0.9 * 2.0 / std::sqrt(49.7 * 49.7 + 400.0), 1e-15);
+  const auto refused = [&](double dt, const SpectrumEstimate& e1, const SpectrumEstimate& e2,
+                           const std::string& why) {
+    try {
+      judge_given_step(dt, 0.6, 0.030, e1, e2, damped);
+      ADD_FAILURE() << why << ": taken";
+    } catch (const ConfigError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find(why), std::string::npos) << m;
+      EXPECT_NE(m.find("time step dt = " + std::to_string(dt) + " ps"), std::string::npos) << m;
+      EXPECT_NE(m.find("dt: auto"), std::string::npos) << m;
+    }
+  };
+  // 22 fs: above 0.6 × 36 fs.
+  refused(0.022, a, b, "above the safe limit 0.021600 ps");
+  // Either start not converged, or the two 1.2 % apart: no measurement to take it on.
+  SpectrumEstimate unconverged = b;
+  unconverged.converged = false;
+  refused(0.020, a, unconverged, "not converged");
+  refused(0.020, unconverged, a, "not converged");
+  SpectrumEstimate apart = b;
+  apart.omega_max = 49.4;
+  refused(0.020, a, apart, "not agreeing");
+  // A non-finite estimate agrees with nothing.
+  SpectrumEstimate nan = b;
+  nan.omega_max = NAN;
+  refused(0.020, a, nan, "not agreeing");
+}
+
 TEST(TensileJob, GivenStepRunsTheTestAfterAnNpDeposit) {
   // NPs deposited after the relaxation: the job rebuilds its system with them at its own step to
   // see whether they overlap; when they do not (here: the placement keeps clear of the tubes),

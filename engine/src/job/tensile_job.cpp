@@ -697,6 +697,18 @@ StepCheck TensileJob::checked_given_dt(const Elements& el, const ParallelBond* r
   const SpectrumEstimate e1 = largest_frequency(*probe, s);
   s.seed = 2;
   const SpectrumEstimate e2 = largest_frequency(*probe, s);
+  return judge_given_step(dt, safety, bound, e1, e2,
+                          [&](double omega) { return probe->damped_critical_dt(omega); });
+}
+
+StepCheck judge_given_step(double dt, double safety, double bound, const SpectrumEstimate& e1,
+                           const SpectrumEstimate& e2,
+                           const std::function<double(double)>& damped_critical) {
+  const auto ps = [](double t) { return std::to_string(t) + " ps"; };
+  StepCheck c;
+  c.dt_ps = dt;
+  c.given = true;
+  c.bound_ps = bound;
   const auto upper = [](const SpectrumEstimate& e) {
     return std::sqrt(e.omega_max * e.omega_max + e.residual);
   };
@@ -710,7 +722,7 @@ StepCheck TensileJob::checked_given_dt(const Elements& el, const ParallelBond* r
                       std::to_string(2.0 / e2.omega_max) + " ps, " +
                       (agree ? "not converged" : "not agreeing") +
                       "): lower dt below that limit, or use dt: auto");
-  const double critical = probe->damped_critical_dt(omega);
+  const double critical = damped_critical(omega);
   c.measured_ps = critical;
   if (dt <= safety * critical) return c;
   throw ConfigError("tensile: time step dt = " + ps(dt) + " is above the safe limit " +

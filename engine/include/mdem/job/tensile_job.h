@@ -25,6 +25,7 @@
 // Units are the engine's internal ones: nm, ps, eV (forces eV/nm); strain rates in 1/ps (the
 // thesis's 1e-7/fs is 1e-4/ps); stresses in the reports are converted to GPa.
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -32,6 +33,7 @@
 #include <vector>
 
 #include "mdem/force/contact/anisotropic_vdw.h"
+#include "mdem/integrate/spectrum.h"
 #include "mdem/job/job.h"
 #include "mdem/job/prerelax_criterion.h"
 #include "mdem/protocol/tensile_protocol.h"
@@ -153,6 +155,16 @@ struct StepCheck {
   // which a given dt above safety × bound_ps was checked against; 0 when not measured.
   double measured_ps = 0;
 };
+
+// The check of a given step dt above safety × the automatic bound (TensileJob, settings.dt) from
+// two Lanczos estimates of the film's largest frequency (two random starts): both must have
+// converged and agree within 1 % (else ConfigError: "not converged" or "not agreeing"); the
+// larger Ritz frequency plus its residual, ω, gives the critical step damped_critical(ω)
+// (System::damped_critical_dt), and dt must be within safety × it (else ConfigError naming dt,
+// the limit, the critical step and the bound). Returns the check with the measured step.
+StepCheck judge_given_step(double dt, double safety, double bound, const SpectrumEstimate& e1,
+                           const SpectrumEstimate& e2,
+                           const std::function<double(double)>& damped_critical);
 
 // The relaxation's records at relax_report_ps.
 struct RelaxFrame {
