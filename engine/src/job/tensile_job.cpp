@@ -186,6 +186,9 @@ void end_at_target(std::vector<double>& eps, std::vector<double>& sig, double ta
   }
 }
 
+// A time for messages: "0.030000 ps".
+std::string ps(double t) { return std::to_string(t) + " ps"; }
+
 }  // namespace
 
 void TensileJobSpec::validate() const {
@@ -660,10 +663,7 @@ StepCheck TensileJob::pick_dt(const Elements& el, const ParallelBond* rest) cons
   double dt = probe->dt();
   if (settings_.respa_k > 1)
     dt = std::min(dt, settings_.safety * probe->critical_outer_dt() / settings_.respa_k);
-  StepCheck c;
-  c.dt_ps = kAutoDtFactor * dt;
-  c.bound_ps = probe->critical_dt();
-  return c;
+  return {kAutoDtFactor * dt, false, probe->critical_dt(), 0.0};
 }
 
 StepCheck TensileJob::step_after_prerelax(const Elements& el, const ParallelBond* rest) const {
@@ -673,18 +673,13 @@ StepCheck TensileJob::step_after_prerelax(const Elements& el, const ParallelBond
 StepCheck TensileJob::checked_given_dt(const Elements& el, const ParallelBond* rest) const {
   const double dt = *given_dt_, safety = settings_.safety;
   const auto probe = this->probe(el, rest);
-  StepCheck c;
-  c.dt_ps = dt;
-  c.given = true;
-  const auto ps = [](double t) { return std::to_string(t) + " ps"; };
   if (settings_.respa_k > 1 && settings_.respa_k * dt > safety * probe->critical_outer_dt())
     throw ConfigError("tensile: the outer step respa_k x dt = " + ps(settings_.respa_k * dt) +
                       " is above the slow forces' safe limit " +
                       ps(safety * probe->critical_outer_dt()) + " on the film the relaxation " +
                       "or test starts from: lower respa_k or dt, or use dt: auto");
   const double bound = probe->critical_dt();
-  c.bound_ps = bound;
-  if (dt <= safety * bound) return c;
+  if (dt <= safety * bound) return {dt, true, bound, 0.0};
   // Above the automatic step's bound, which is up to 2x below the true limit on a relaxed film
   // (docs/stability.md): measure the true one, from two random starts that must agree (the top
   // of a film's spectrum is dense, and a Ritz value that met its tolerance early can be an
@@ -704,11 +699,6 @@ StepCheck TensileJob::checked_given_dt(const Elements& el, const ParallelBond* r
 StepCheck judge_given_step(double dt, double safety, double bound, const SpectrumEstimate& e1,
                            const SpectrumEstimate& e2,
                            const std::function<double(double)>& damped_critical) {
-  const auto ps = [](double t) { return std::to_string(t) + " ps"; };
-  StepCheck c;
-  c.dt_ps = dt;
-  c.given = true;
-  c.bound_ps = bound;
   const auto upper = [](const SpectrumEstimate& e) {
     return std::sqrt(e.omega_max * e.omega_max + e.residual);
   };
@@ -723,8 +713,7 @@ StepCheck judge_given_step(double dt, double safety, double bound, const Spectru
                       (agree ? "not converged" : "not agreeing") +
                       "): lower dt below that limit, or use dt: auto");
   const double critical = damped_critical(omega);
-  c.measured_ps = critical;
-  if (dt <= safety * critical) return c;
+  if (dt <= safety * critical) return {dt, true, bound, critical};
   throw ConfigError("tensile: time step dt = " + ps(dt) + " is above the safe limit " +
                     ps(safety * critical) + " of the film the relaxation or test starts from " +
                     "(safety " + std::to_string(safety) + " x its critical step " + ps(critical) +
