@@ -102,6 +102,15 @@ inline Vec3 displacement(const Domain& domain, const Vec3& xi, const Vec3& xj) {
     return xj - xi;
 }
 
+// Whether a list's pairs are shared by the team (drive_pairs and drive_pairs_fused alike, so a
+// fused pass's sums stay those of its two passes): from kParallelMinItems listed pairs, as every
+// loop of the step. A pair costs 20-200 ns, so even the smallest such list (~40 us on one thread)
+// outweighs a team's wake-up; at twice that, the tensile film's NP-NP pairs (4088 with 4000
+// NPs, 0.2 ms a step) ran on one thread while the other waited.
+inline bool team_for(const NeighborList& list) {
+  return static_cast<long>(list.pair_count()) >= kParallelMinItems;
+}
+
 // The kernel's per-evaluation cache of every element (a worksharing loop of the calling team).
 template <class K>
 inline void prepare_all(const K& k, const Elements& el, long n) {
@@ -386,8 +395,7 @@ void drive_pairs(const K& k, const Elements& el, const NeighborList& list, Force
   // No pairs, nothing to add: not a pass over every row (an NP sub-list of a film without NPs).
   if (list.pair_count() == 0) return;
   if constexpr (requires { k.begin(el); }) k.begin(el);
-  // The pair loop is heavy: worth a team from a few thousand listed pairs on.
-  const bool threaded = static_cast<long>(list.pair_count()) >= 2 * kParallelMinItems;
+  const bool threaded = pair_driver_detail::team_for(list);
   using namespace pair_driver_detail;
   const bool periodic = list.domain().any_periodic();
   if (periodic) {
@@ -421,7 +429,7 @@ void drive_pairs_fused(const K& k, const C& c, const Elements& el, const Neighbo
   if (list.pair_count() == 0) return;
   if constexpr (requires { k.begin(el); }) k.begin(el);
   if constexpr (requires { c.begin(el); }) c.begin(el);
-  const bool threaded = static_cast<long>(list.pair_count()) >= 2 * kParallelMinItems;
+  const bool threaded = pair_driver_detail::team_for(list);
   using namespace pair_driver_detail;
   if (list.domain().any_periodic())
     run_batched<true, false>(k, el, list, sink, threaded, &c);
