@@ -60,18 +60,23 @@ def parse_args(argv):
     return a, builds, env, counters
 
 
+def benchmark_json(cmd, out, err, code, tool="ab.py"):
+    """The benchmarks of a Google Benchmark run's JSON output; exits naming what went wrong."""
+    if code != 0:
+        sys.exit(f"{tool}: {' '.join(cmd)} failed (exit {code}):\n{err[-2000:]}")
+    if not out.strip():
+        sys.exit(f"{tool}: {' '.join(cmd)}: no output (does the filter match a benchmark?)\n"
+                 f"{err[-2000:]}")
+    try:
+        return json.loads(out)["benchmarks"]
+    except (ValueError, KeyError) as e:
+        sys.exit(f"{tool}: {' '.join(cmd)}: no benchmark JSON on stdout ({e})")
+
+
 def run_once(prog, flt, env):
     cmd = [prog, f"--benchmark_filter={flt}", "--benchmark_format=json"]
     p = subprocess.run(cmd, env=env, capture_output=True, text=True)
-    if p.returncode != 0:
-        sys.exit(f"ab.py: {' '.join(cmd)} failed (exit {p.returncode}):\n{p.stderr[-2000:]}")
-    if not p.stdout.strip():
-        sys.exit(f"ab.py: {' '.join(cmd)}: no output (does the filter match a benchmark?)\n"
-                 f"{p.stderr[-2000:]}")
-    try:
-        return p.stdout, json.loads(p.stdout)["benchmarks"]
-    except (ValueError, KeyError) as e:
-        sys.exit(f"ab.py: {' '.join(cmd)}: no benchmark JSON on stdout ({e})")
+    return p.stdout, benchmark_json(cmd, p.stdout, p.stderr, p.returncode)
 
 
 def main(argv):
