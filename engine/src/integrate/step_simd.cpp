@@ -150,7 +150,8 @@ HWY_INLINE bool chunk(const Pass& p, long i, double* s2, double* s1, long* runaw
   const V m = hn::LoadU(d, p.mass + i), inv_m = hn::LoadU(d, p.inv_mass + i);
   const V I = I3.x, inv_I = hn::Set(d, 1.0) / I;
   V3 v = load3(p.v, i), w = load3(p.w, i);
-  const V3 fe = load3(p.f_ext, i), te = load3(p.t_ext, i);
+  const V3 none{zero, zero, zero};
+  const V3 fe = p.f_ext ? load3(p.f_ext, i) : none, te = p.t_ext ? load3(p.t_ext, i) : none;
   // Loads of what the sink may replace; its buffers are zeroed only once the chunk is known good.
   const bool sink = kSecond && p.sink_threads > 0;
   const bool sink_damp = sink && p.sink_fd != nullptr;
@@ -160,7 +161,6 @@ HWY_INLINE bool chunk(const Pass& p, long i, double* s2, double* s1, long* runaw
   const bool damped = kSecond && p.alpha > 0;
   // Local damping without model dampers starts fd, td from zero (local_damping): not loaded.
   const bool fd_from_zero = damped && !p.model_damping;
-  const V3 none{zero, zero, zero};
   V3 fd = fd_from_zero ? none : sink_damp ? thread_sum(p.sink_fd, nt, i) : load3(p.fd, i);
   V3 td = fd_from_zero           ? none
           : !sink_damp           ? load3(p.td, i)

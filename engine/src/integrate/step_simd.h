@@ -18,7 +18,7 @@ namespace mdem::step_simd {
 // doubles (a Vec3 is 3, a quaternion x, y, z, w), and the pass's settings.
 struct Pass {
   double *x, *q, *v, *w, *f, *t, *fd, *td;
-  const double *f_ext, *t_ext, *mass, *inv_mass, *inertia, *radius;
+  const double *f_ext, *t_ext, *mass, *inv_mass, *inertia, *radius;  // f_ext, t_ext null: all zero
   const unsigned char* dof;  // 6 DofMode bytes per element (Free = 0)
   // The force evaluation's per-thread buffers when its sums are still to be taken
   // (ForceSink::take): sink[k] for thread k, force, torque, and the damping force and torque

@@ -98,8 +98,9 @@ auto chunked(const step_simd::Pass* pass, long lanes, const Body& body) {
 }
 
 // The arrays and settings of a pass in lanes (step_simd.h) from a pass's context; the sink's
-// buffer pointers are kept in buffers (4 per thread).
-step_simd::Pass lanes_pass(const step::StepContext& c, bool second, bool first,
+// buffer pointers are kept in buffers (4 per thread). loads: whether any element may carry an
+// external load (else the pass does not read f_ext, t_ext: all zero).
+step_simd::Pass lanes_pass(const step::StepContext& c, bool second, bool first, bool loads,
                            std::vector<double*>& buffers) {
   static_assert(sizeof(Vec3) == 3 * sizeof(double) && sizeof(Quat) == 4 * sizeof(double));
   static_assert(sizeof(std::array<DofMode, 6>) == 6);
@@ -115,8 +116,8 @@ step_simd::Pass lanes_pass(const step::StepContext& c, bool second, bool first,
   p.t = d(E.t);
   p.fd = reinterpret_cast<double*>(c.fd);
   p.td = reinterpret_cast<double*>(c.td);
-  p.f_ext = cd(E.f_ext);
-  p.t_ext = cd(E.t_ext);
+  p.f_ext = loads ? cd(E.f_ext) : nullptr;
+  p.t_ext = loads ? cd(E.t_ext) : nullptr;
   p.mass = E.mass.data();
   p.inv_mass = E.inv_mass.data();
   p.inertia = cd(E.inertia);
@@ -518,6 +519,7 @@ void System::run(long nsteps) {
   if (!initialized_) initialize();
   check_memory_order();  // a stage may have installed updaters since
   omp_set_num_threads(threads_);
+  loads_ = any_loads();
   const double dt = dt_, h = 0.5 * dt_;
   const long n = static_cast<long>(el_.size());
   auto& E = el_;
@@ -551,7 +553,7 @@ void System::run(long nsteps) {
               if (!step::first_element<C>(c, i, s[0], s[1])) mark[0] = i;
             });
       };
-      const step_simd::Pass p1 = lanes_pass(c, false, true, sink_buffers_);
+      const step_simd::Pass p1 = lanes_pass(c, false, true, loads_, sink_buffers_);
       runaway = ordered_sums<2>(n, partial_sums_, {&work, &diss},
                                 chunked<0>(fast ? &p1 : nullptr, lanes, first))[0];
     }
@@ -609,7 +611,7 @@ void System::run(long nsteps) {
     double kt = 0, kr = 0, work_next = 0, diss_next = 0;
     // Lanes take pass 2 unless multiple time stepping's held forces enter local damping.
     const bool lanes2 = fast && !(c2.alpha > 0 && c2.net);
-    step_simd::Pass p2 = lanes_pass(c2, true, fuse, sink_buffers_);
+    step_simd::Pass p2 = lanes_pass(c2, true, fuse, loads_, sink_buffers_);
     // Whether an updater's next apply() reads the forces this pass takes (else a fused pass
     // keeps them in registers: step_simd::Pass::keep_forces).
     p2.keep_forces = std::any_of(updaters_.begin(), updaters_.end(),
@@ -644,6 +646,22 @@ void System::run(long nsteps) {
     diss = diss_next;
     lap(mark, timers.integrate_s);
   }
+}
+
+bool System::any_loads() const {
+  if (std::any_of(updaters_.begin(), updaters_.end(),
+                  [](const auto& u) { return u->applies_loads(); }))
+    return true;
+  // Anything but +0 (a −0 or a NaN too), so that the pass's zeros are the stored ones bit for bit.
+  const auto set = [](const Vec3& v) {
+    return (v.x() != 0.0) | (v.y() != 0.0) | (v.z() != 0.0) | std::signbit(v.x()) |
+           std::signbit(v.y()) | std::signbit(v.z());
+  };
+  const long n = static_cast<long>(el_.size());
+  int loaded = 0;  // an OR over the elements: exact in any order
+#pragma omp parallel for schedule(static) reduction(| : loaded) if (n >= kParallelMinItems)
+  for (long i = 0; i < n; ++i) loaded |= set(el_.f_ext[i]) | set(el_.t_ext[i]);
+  return loaded != 0;
 }
 
 void System::update_energy_scale() {

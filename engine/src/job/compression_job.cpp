@@ -73,6 +73,7 @@ Elements with_platens(const PackedParticle& packed, const PackingSpec& p) {
 class CompressionJob::Tracker final : public Updater {
  public:
   explicit Tracker(const CompressionJob& job) : job_(job) {}
+  bool applies_loads() const override { return false; }  // an observer
   void apply(System& sys, double) override {
     if (have_prev) {
       const double F = job_.platen_force_nN();

@@ -278,6 +278,7 @@ class TensileJob::RelaxTracker final : public Updater {
   }
   // Positions, the bonds' energies and forces (their own state): not the elements' forces.
   bool reads_forces() const override { return false; }
+  bool applies_loads() const override { return false; }
   void apply(System& sys, double t) override {
     const double tol = 0.5 * sys.dt();
     while (next_report_ < times_.size() && t >= times_[next_report_] - tol) {
@@ -334,6 +335,7 @@ class TensileJob::TestTracker final : public Updater {
 
   // Positions and the bonds' own state: not the elements' forces.
   bool reads_forces() const override { return false; }
+  bool applies_loads() const override { return false; }
   void apply(System& sys, double t) override {
     const TensileProtocol& p = *job_.protocol_;
     if (!p.started()) return;

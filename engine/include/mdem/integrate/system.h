@@ -46,6 +46,11 @@ class Updater : public Stateful, public ElementIndexHolder {
   // run). An updater whose next apply() reads them after saying false sees forces one or more
   // steps old. True (always fresh) unless an updater says otherwise.
   virtual bool reads_forces() const { return true; }
+  // Whether apply() may set external loads (Elements::f_ext, t_ext). When no updater says true
+  // and every element's loads are zero at the start of a run, the integrator's pass in lanes
+  // does not read them (48 bytes per element and step). True unless an updater says otherwise;
+  // one that sets loads after saying false has them ignored by that pass.
+  virtual bool applies_loads() const { return true; }
   void save_state(StateWriter&) const override {}
   void load_state(StateReader&) override {}
 };
@@ -279,6 +284,8 @@ class System {
   // What a guard message says to change: dt when above the safe limit, else the real suspects.
   std::string unstable_cause() const;
   void update_energy_scale();
+  // Whether an updater may apply loads or an element carries one now (run()'s loads_).
+  bool any_loads() const;
   void start_ledger();  // the ledger's origin at the current state
 
   Elements el_;
@@ -316,7 +323,9 @@ class System {
   bool initialized_ = false;
   bool dissipative_ = false;
   bool local_damping_was_on_ = false;  // fd_/td_ may hold local damping to clear
-  bool sums_deferred_ = false;         // the last compute_forces left the sums in sink_
+  bool loads_ =
+      true;  // some element may carry an external load in this run (Updater::applies_loads)
+  bool sums_deferred_ = false;  // the last compute_forces left the sums in sink_
 };
 
 // The instruction set the integrator's lanes run on (IntegratorSettings::free_isotropic_fast_path),

@@ -64,6 +64,7 @@ class GripStressSampler final : public Updater {
   void apply(System& sys, double t) override;
   // Only when the next call samples (the grips' forces of the evaluation made at this call).
   bool reads_forces() const override;
+  bool applies_loads() const override { return false; }  // an observer
 
   const std::vector<GripSample>& samples() const { return samples_; }
   // Columns of the series, for the stress–strain and cycle analyses.

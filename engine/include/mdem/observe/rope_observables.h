@@ -84,7 +84,8 @@ class ShiftAngleSampler final : public Updater {
  public:
   ShiftAngleSampler(const Elements& reference, const Rope& rope, long every = 10);
   void apply(System& sys, double t) override;
-  bool reads_forces() const override { return false; }  // positions and orientations only
+  bool reads_forces() const override { return false; }   // positions and orientations only
+  bool applies_loads() const override { return false; }  // an observer
   // Samples now (a report between samples); the angle in radians.
   double sample(const Elements& el);
   double angle() const { return value_; }

@@ -24,7 +24,8 @@ class CompressionProtocol final : public Protocol {
   // With the system's step dt known, the velocity is the motion law's mean over [t, t + dt], so
   // the platens follow the law exactly at every step. Stateless: nothing to checkpoint.
   void apply(System& sys, double t) override;
-  bool reads_forces() const override { return false; }  // platen motion from the time alone
+  bool reads_forces() const override { return false; }   // platen motion from the time alone
+  bool applies_loads() const override { return false; }  // prescribed motion, no loads
   // The platens' element indices, when they are known only once the scene is built.
   void set_platens(std::size_t top, std::size_t bottom);
   double duration() const;   // h/(2·speed) loading, as long again unloading

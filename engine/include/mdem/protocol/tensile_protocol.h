@@ -103,7 +103,8 @@ class TensileProtocol final : public Protocol {
 
   // The updater: the grip DOF modes and velocities for the step from system time t.
   void apply(System& sys, double t) override;
-  bool reads_forces() const override { return false; }  // grip motion from the time alone
+  bool reads_forces() const override { return false; }   // grip motion from the time alone
+  bool applies_loads() const override { return false; }  // prescribed motion, no loads
   // "ramp", "straining" (monotonic); "cycle k/n", then "done" (cyclic).
   std::string phase(double t) const override;
   // A runaway element one of whose bonds is drawn out past its own rest length: the model's
