@@ -21,6 +21,19 @@ import sys
 from collections import defaultdict
 
 
+def checked_rounds_and_env(ap, a):
+    """Refuses --rounds outside 1..1000 and an --env without KEY=; the runs' environment."""
+    if a.rounds < 1 or a.rounds > 1000:
+        ap.error(f"--rounds {a.rounds}: expected 1 to 1000")
+    env = dict(os.environ)
+    for e in a.env:
+        k, sep, v = e.partition("=")
+        if not sep or not k:
+            ap.error(f"--env {e!r}: expected KEY=VALUE")
+        env[k] = v
+    return env
+
+
 def parse_args(argv):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--build", action="append", required=True, metavar="NAME=DIR",
@@ -46,14 +59,7 @@ def parse_args(argv):
         builds.append((name, prog))
     if len({n for n, _ in builds}) != len(builds):
         ap.error("--build names must differ")
-    if a.rounds < 1 or a.rounds > 1000:
-        ap.error(f"--rounds {a.rounds}: expected 1 to 1000")
-    env = dict(os.environ)
-    for e in a.env:
-        k, sep, v = e.partition("=")
-        if not sep or not k:
-            ap.error(f"--env {e!r}: expected KEY=VALUE")
-        env[k] = v
+    env = checked_rounds_and_env(ap, a)
     counters = [c for c in a.counters.split(",") if c]
     if not counters:
         ap.error("--counters: name at least one counter")

@@ -23,7 +23,7 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ab import benchmark_json  # noqa: E402  (one parser of a benchmark's JSON for both tools)
+from ab import benchmark_json, checked_rounds_and_env  # noqa: E402  (shared with ab.py)
 
 
 def parse_args(argv):
@@ -45,17 +45,9 @@ def parse_args(argv):
     prog = os.path.join(a.build, "bench", a.bench)
     if not os.access(prog, os.X_OK):
         ap.error(f"--build {a.build!r}, --bench {a.bench!r}: no executable {prog}")
-    if a.rounds < 1 or a.rounds > 1000:
-        ap.error(f"--rounds {a.rounds}: expected 1 to 1000")
     if os.cpu_count() is None or os.cpu_count() < 2:
         ap.error("this machine has fewer than 2 CPUs: nothing to compare")
-    env = dict(os.environ)
-    for e in a.env:
-        k, sep, v = e.partition("=")
-        if not sep or not k:
-            ap.error(f"--env {e!r}: expected KEY=VALUE")
-        env[k] = v
-    return a, prog, env
+    return a, prog, checked_rounds_and_env(ap, a)
 
 
 def command(prog, flt, cpu=None):

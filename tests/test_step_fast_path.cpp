@@ -222,16 +222,22 @@ TEST(StepFastPath, LanesOfEveryInstructionSetEqualTheGeneralPath) {
   hwy::SetSupportedTargetsForTest(0);
 }
 
-TEST(StepFastPath, ConstantLoadIsIntegratedExactly) {
-  // A free isotropic body (the fast path's class) under a constant force F and torque T: velocity
-  // Verlet is exact for a constant force, so v = v0 + F t/m, x = x0 + v0 t + F t²/(2m),
-  // ω = ω0 + T t/I; the work booked (trapezoidal F·Δx) equals the kinetic energy gained.
+// The body the constant-load tests load: free, isotropic, moving and spinning.
+ElementInit moving_body() {
   ElementInit e;
   e.mass = 2.0;
   e.inertia = Vec3::Constant(0.5);
   e.radius = 1.0;
   e.v = Vec3(0.1, -0.2, 0.05);
   e.w = Vec3(0.01, 0.02, -0.03);
+  return e;
+}
+
+TEST(StepFastPath, ConstantLoadIsIntegratedExactly) {
+  // A free isotropic body (the fast path's class) under a constant force F and torque T: velocity
+  // Verlet is exact for a constant force, so v = v0 + F t/m, x = x0 + v0 t + F t²/(2m),
+  // ω = ω0 + T t/I; the work booked (trapezoidal F·Δx) equals the kinetic energy gained.
+  const ElementInit e = moving_body();
   Elements el;
   el.add(e);
   const Vec3 F(0.3, 0.1, -0.2), T(0.002, -0.001, 0.003);
@@ -269,12 +275,7 @@ class NoLoads final : public Updater {
 };
 
 void expect_constant_loads_integrated(bool by_updater, bool with_observer) {
-  ElementInit e;
-  e.mass = 2.0;
-  e.inertia = Vec3::Constant(0.5);
-  e.radius = 1.0;
-  e.v = Vec3(0.1, -0.2, 0.05);
-  e.w = Vec3(0.01, 0.02, -0.03);
+  ElementInit e = moving_body();
   const Vec3 F(0.3, 0.1, -0.2), T(0.002, -0.001, 0.003);
   Elements el;
   for (int k = 0; k < 64; ++k) {
