@@ -34,7 +34,8 @@ def parse_args(argv):
     ap.add_argument("--two", required=True, help="--benchmark_filter of the 2-thread benchmark")
     ap.add_argument("--rounds", type=int, default=5, help="rounds (default 5)")
     ap.add_argument("--counter", default="element_steps_per_s",
-                    help="the rate to compare (default element_steps_per_s)")
+                    help="the rate to compare, higher is better (two copies' rates are "
+                    "summed; not a time such as ns_per_element; default element_steps_per_s)")
     ap.add_argument("--phases", default="",
                     help="comma-separated per-step time counters to show too (e.g. pair_ms,"
                     "neighbor_ms,integrate_ms): medians for one alone, a copy (the two's mean), "
