@@ -49,7 +49,8 @@ class Updater : public Stateful, public ElementIndexHolder {
   // Whether apply() may set external loads (Elements::f_ext, t_ext). When no updater says true
   // and every element's loads are zero at the start of a run, the integrator's pass in lanes
   // does not read them (48 bytes per element and step). True unless an updater says otherwise;
-  // one that sets loads after saying false has them ignored by that pass.
+  // an updater must not set loads after saying false: the lanes would run without them (the
+  // scalar kernels, for the elements outside the lanes, would not).
   virtual bool applies_loads() const { return true; }
   void save_state(StateWriter&) const override {}
   void load_state(StateReader&) override {}
@@ -323,8 +324,8 @@ class System {
   bool initialized_ = false;
   bool dissipative_ = false;
   bool local_damping_was_on_ = false;  // fd_/td_ may hold local damping to clear
-  bool loads_ =
-      true;  // some element may carry an external load in this run (Updater::applies_loads)
+  // Some element may carry an external load in this run (Updater::applies_loads).
+  bool loads_ = true;
   bool sums_deferred_ = false;  // the last compute_forces left the sums in sink_
 };
 
