@@ -519,7 +519,7 @@ void System::run(long nsteps) {
   if (!initialized_) initialize();
   check_memory_order();  // a stage may have installed updaters since
   omp_set_num_threads(threads_);
-  loads_ = any_loads();
+  const bool loads = any_loads();  // for the whole run (its updaters do not change within it)
   const double dt = dt_, h = 0.5 * dt_;
   const long n = static_cast<long>(el_.size());
   auto& E = el_;
@@ -553,7 +553,7 @@ void System::run(long nsteps) {
               if (!step::first_element<C>(c, i, s[0], s[1])) mark[0] = i;
             });
       };
-      const step_simd::Pass p1 = lanes_pass(c, false, true, loads_, sink_buffers_);
+      const step_simd::Pass p1 = lanes_pass(c, false, true, loads, sink_buffers_);
       runaway = ordered_sums<2>(n, partial_sums_, {&work, &diss},
                                 chunked<0>(fast ? &p1 : nullptr, lanes, first))[0];
     }
@@ -611,7 +611,7 @@ void System::run(long nsteps) {
     double kt = 0, kr = 0, work_next = 0, diss_next = 0;
     // Lanes take pass 2 unless multiple time stepping's held forces enter local damping.
     const bool lanes2 = fast && !(c2.alpha > 0 && c2.net);
-    step_simd::Pass p2 = lanes_pass(c2, true, fuse, loads_, sink_buffers_);
+    step_simd::Pass p2 = lanes_pass(c2, true, fuse, loads, sink_buffers_);
     // Whether an updater's next apply() reads the forces this pass takes (else a fused pass
     // keeps them in registers: step_simd::Pass::keep_forces).
     p2.keep_forces = std::any_of(updaters_.begin(), updaters_.end(),

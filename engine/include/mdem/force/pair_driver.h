@@ -395,8 +395,8 @@ void drive_pairs(const K& k, const Elements& el, const NeighborList& list, Force
   // No pairs, nothing to add: not a pass over every row (an NP sub-list of a film without NPs).
   if (list.pair_count() == 0) return;
   if constexpr (requires { k.begin(el); }) k.begin(el);
-  const bool threaded = pair_driver_detail::team_for(list);
   using namespace pair_driver_detail;
+  const bool threaded = team_for(list);
   const bool periodic = list.domain().any_periodic();
   if (periodic) {
     if (filter)
@@ -429,8 +429,8 @@ void drive_pairs_fused(const K& k, const C& c, const Elements& el, const Neighbo
   if (list.pair_count() == 0) return;
   if constexpr (requires { k.begin(el); }) k.begin(el);
   if constexpr (requires { c.begin(el); }) c.begin(el);
-  const bool threaded = pair_driver_detail::team_for(list);
   using namespace pair_driver_detail;
+  const bool threaded = team_for(list);
   if (list.domain().any_periodic())
     run_batched<true, false>(k, el, list, sink, threaded, &c);
   else

@@ -285,7 +285,7 @@ class System {
   // What a guard message says to change: dt when above the safe limit, else the real suspects.
   std::string unstable_cause() const;
   void update_energy_scale();
-  // Whether an updater may apply loads or an element carries one now (run()'s loads_).
+  // Whether an updater may apply loads or an element carries one now (asked at run()'s start).
   bool any_loads() const;
   void start_ledger();  // the ledger's origin at the current state
 
@@ -324,9 +324,7 @@ class System {
   bool initialized_ = false;
   bool dissipative_ = false;
   bool local_damping_was_on_ = false;  // fd_/td_ may hold local damping to clear
-  // Some element may carry an external load in this run (Updater::applies_loads).
-  bool loads_ = true;
-  bool sums_deferred_ = false;  // the last compute_forces left the sums in sink_
+  bool sums_deferred_ = false;         // the last compute_forces left the sums in sink_
 };
 
 // The instruction set the integrator's lanes run on (IntegratorSettings::free_isotropic_fast_path),
