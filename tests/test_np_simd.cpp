@@ -392,7 +392,9 @@ TEST(NpNpSimd, FilmForcesEqualTheScalarLaw) {
       for (std::size_t i = 0; i < el.size(); ++i) {
         ASSERT_EQ(again.f[i], got.f[i]) << "element " << i;
         EXPECT_EQ(got.t[i], Vec3::Zero());
-        if (el.kind[i] != ElementKind::Nanoparticle) EXPECT_EQ(got.f[i], Vec3::Zero());
+        if (el.kind[i] != ElementKind::Nanoparticle) {
+          EXPECT_EQ(got.f[i], Vec3::Zero());
+        }
         f_sum += got.f[i];
         scale = std::max(scale, got.f[i].norm());
       }
@@ -617,7 +619,8 @@ TEST(ElementsAxis, IsEigensRotationOfUnitX) {
 #else  // (a native build may contract the two forms into fused multiply-adds differently)
     EXPECT_LT((a - eigen).norm(), 1e-15 * qs[i].squaredNorm()) << "quaternion " << i;
 #endif
-    if (std::abs(qs[i].norm() - 1) < 1e-15)
+    if (std::abs(qs[i].norm() - 1) < 1e-15) {
       EXPECT_LT((a - qs[i].toRotationMatrix().col(0)).norm(), 1e-14) << "quaternion " << i;
+    }
   }
 }

@@ -305,7 +305,9 @@ void expect_constant_loads_integrated(bool by_updater, bool with_observer) {
     }
   }
   sys.run(400);
-  if (with_observer) EXPECT_GE(observer->calls, 400);
+  if (with_observer) {
+    EXPECT_GE(observer->calls, 400);
+  }
   const double h = 0.5 * s.dt.value();
   const double t = sys.time() - (by_updater ? h : 0.0);
   const Elements& E = sys.elements();
