@@ -14,6 +14,7 @@
 #include <immintrin.h>
 #include <omp.h>
 
+#include <atomic>
 #include <cstddef>
 #include <vector>
 
@@ -92,6 +93,91 @@ void BM_MemoryUpdate(benchmark::State& state) {
       benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_MemoryUpdate)->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime();
+
+// What the two threads of a 2-thread run pay to pass data between their cores, which two
+// 1-thread processes never do (docs/engine.md, "Two threads against two processes"). A VM's two
+// CPUs may sit on one core complex (a shared L3) or on two, and may move between hours; these
+// two figures say which, next to a 2-thread benchmark run at the same time. Skipped unless the
+// team has 2 threads on at least 2 CPUs (one spinning thread would wait out the other's time
+// slices).
+//
+// One cache line bounced between the two threads: round_trip_ns, the time for the line to go to
+// the other core and come back (two handoffs).
+void BM_LineRoundTrip(benchmark::State& state) {
+  constexpr long kRounds = 20000;
+  alignas(64) std::atomic<long> turn{0};
+  bool two = omp_get_num_procs() >= 2;
+  for (auto _ : state) {
+    if (!two) break;
+    turn.store(0);
+#pragma omp parallel num_threads(2)
+    {
+      if (omp_get_num_threads() != 2) {
+#pragma omp single
+        two = false;
+      } else {
+        const long me = omp_get_thread_num();
+        for (long k = 0; k < kRounds; ++k) {
+          const long mine = 2 * k + me;
+          while (turn.load(std::memory_order_acquire) != mine) {
+          }
+          turn.store(mine + 1, std::memory_order_release);
+        }
+      }
+    }
+    if (!two) break;
+  }
+  if (!two) {
+    state.SkipWithError("needs a team of 2 threads on 2 CPUs");
+    return;
+  }
+  state.counters["round_trip_ns"] = benchmark::Counter(
+      static_cast<double>(kRounds) * static_cast<double>(state.iterations()) * 1e-9,
+      benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_LineRoundTrip)->UseRealTime();
+
+// Reading 16 MB of doubles that a core has just written (as the integrator's pass reads the
+// force sums the pair loop wrote): other:0 the same thread wrote them, other:1 the other thread
+// did. gb_per_s counts the reads only, timed apart from the writes.
+void BM_ReadAfterWrite(benchmark::State& state) {
+  const bool other = state.range(0) != 0;
+  const std::size_t n = std::size_t{1} << 21;  // 16 MB
+  std::vector<double> a(n, 0.0);
+  double read_s = 0, sink = 0;
+  bool two = true;
+  for (auto _ : state) {
+#pragma omp parallel num_threads(2)
+    {
+      if (omp_get_num_threads() != 2) {
+#pragma omp single
+        two = false;
+      } else {
+        const int writer = 0, reader = other ? 1 : 0;
+        if (omp_get_thread_num() == writer)
+          for (std::size_t i = 0; i < n; ++i) a[i] = static_cast<double>(i);
+#pragma omp barrier
+        if (omp_get_thread_num() == reader) {
+          const double t0 = omp_get_wtime();
+          double s[8] = {};  // 8 chains: the loads, not one add's latency, set the rate
+          for (std::size_t i = 0; i < n; i += 8)
+            for (int k = 0; k < 8; ++k) s[k] += a[i + k];
+          read_s += omp_get_wtime() - t0;
+          for (double v : s) sink += v;
+        }
+      }
+    }
+    if (!two) break;
+  }
+  benchmark::DoNotOptimize(sink);
+  if (!two) {
+    state.SkipWithError("needs a team of 2 threads");
+    return;
+  }
+  state.counters["gb_per_s"] = static_cast<double>(state.iterations()) *
+                               static_cast<double>(n * sizeof(double)) * 1e-9 / read_s;
+}
+BENCHMARK(BM_ReadAfterWrite)->ArgName("other")->Arg(0)->Arg(1)->UseRealTime();
 
 }  // namespace
 
