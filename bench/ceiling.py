@@ -8,7 +8,10 @@ machine's ceiling for two streams of this work; the two-thread rate over it is w
 structure keeps of that. Each round runs, one after the other: the 1-thread benchmark alone,
 two copies of it at once (pinned to CPUs 0 and 1 with taskset where it exists), the 2-thread
 benchmark. Medians over the rounds, and every round's ratios (these VMs change speed by 20-30 %
-from hour to hour, so only a round's own runs are compared).
+from hour to hour, so only a round's own runs are compared). With --probe, each round starts
+with bench_machine's two placement figures: a cache line's round trip between the two threads
+and the rate of reading what the other core just wrote against one's own (a VM's two CPUs may
+sit near each other or far apart, and move between hours; docs/engine.md, "Five more tries").
 
   bench/ceiling.py --build build --bench bench_tensile_film \\
       --one 'BM_RelaxedMediumFilm/threads:1/nps:1/morton:0/' \\
@@ -42,10 +45,16 @@ def parse_args(argv):
                     "2 threads")
     ap.add_argument("--env", action="append", default=[], metavar="KEY=VALUE",
                     help="environment for the runs (repeat)")
+    ap.add_argument("--probe", action="store_true",
+                    help="each round, first measure where the two CPUs sit (bench_machine's "
+                    "BM_LineRoundTrip and BM_ReadAfterWrite, from the same build)")
     a = ap.parse_args(argv)
     prog = os.path.join(a.build, "bench", a.bench)
     if not os.access(prog, os.X_OK):
         ap.error(f"--build {a.build!r}, --bench {a.bench!r}: no executable {prog}")
+    a.machine = os.path.join(a.build, "bench", "bench_machine")
+    if a.probe and not os.access(a.machine, os.X_OK):
+        ap.error(f"--probe: no executable {a.machine} (build the bench_machine target)")
     if os.cpu_count() is None or os.cpu_count() < 2:
         ap.error("this machine has fewer than 2 CPUs: nothing to compare")
     return a, prog, checked_rounds_and_env(ap, a)
@@ -84,13 +93,39 @@ def run_pair(cmd_a, cmd_b, env, names):
             for c, (o, e), p in zip((cmd_a, cmd_b), outs, procs)]
 
 
+PROBE_FILTER = "BM_LineRoundTrip|BM_ReadAfterWrite"
+
+
+def probe(machine, env):
+    """Round trip (ns), read after the other core's write and after one's own (GB/s)."""
+    cmd = [machine, f"--benchmark_filter={PROBE_FILTER}", "--benchmark_format=json"]
+    p = subprocess.run(cmd, env=env, capture_output=True, text=True)
+    found = {}
+    for b in benchmark_json(cmd, p.stdout, p.stderr, p.returncode, "ceiling.py"):
+        if b.get("error_occurred"):
+            sys.exit(f"ceiling.py: --probe: {b['name']}: {b.get('error_message', 'skipped')}")
+        found[b["name"].split("/real_time")[0]] = b
+    try:
+        return (float(found["BM_LineRoundTrip"]["round_trip_ns"]),
+                float(found["BM_ReadAfterWrite/other:1"]["gb_per_s"]),
+                float(found["BM_ReadAfterWrite/other:0"]["gb_per_s"]))
+    except KeyError as e:
+        sys.exit(f"ceiling.py: --probe: {' '.join(cmd)} gave no {e}")
+
+
 def main(argv):
     a, prog, env = parse_args(argv)
     phases = [c for c in a.phases.split(",") if c]
     names = [a.counter] + phases
     alone, copies, two = [], [], []
     phase = {"1 thread alone": [], "one of two copies": [], "2 threads": []}
+    placement = []
     for r in range(a.rounds):
+        if a.probe:
+            placement.append(probe(a.machine, env))
+            print(f"round {r + 1} of {a.rounds}: round trip {placement[-1][0]:.0f} ns, read after "
+                  f"the other core's write {placement[-1][1]:.1f} GB/s, after its own "
+                  f"{placement[-1][2]:.1f}", file=sys.stderr)
         one = run(command(prog, a.one), env, names)
         pair = run_pair(command(prog, a.one, 0), command(prog, a.one, 1), env, names)
         both = run(command(prog, a.two), env, names)
@@ -110,6 +145,9 @@ def main(argv):
             ("2 threads / two copies", [t / c for t, c in zip(two, copies)])]
     for name, v in rows:
         print(f"  {name:44s} median {med(v):.3f}   by round: " + ", ".join(f"{x:.3f}" for x in v))
+    if placement:
+        print("  placement by round (round trip ns, other's / own GB/s): " + ", ".join(
+            f"{t:.0f} {o:.0f}/{w:.0f}" for t, o, w in placement))
     for name, v in phase.items():
         if phases:
             print(f"  {name:20s} " + "  ".join(
