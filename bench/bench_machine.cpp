@@ -101,36 +101,46 @@ BENCHMARK(BM_MemoryUpdate)->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime();
 // team has 2 threads on at least 2 CPUs (one spinning thread would wait out the other's time
 // slices).
 //
+// Runs body(thread) on a team of exactly 2 threads, thread 0 and 1 (body may hold barriers);
+// false, body not run, with fewer than 2 CPUs or a smaller team.
+template <class Body>
+bool on_two_threads(const Body& body) {
+  if (omp_get_num_procs() < 2) return false;
+  bool two = true;
+#pragma omp parallel num_threads(2)
+  {
+    if (omp_get_num_threads() != 2) {
+#pragma omp single
+      two = false;
+    } else {
+      body(omp_get_thread_num());
+    }
+  }
+  return two;
+}
+constexpr const char* kNeedsTwo = "needs a team of 2 threads on 2 CPUs";
+
 // One cache line bounced between the two threads: round_trip_ns, the time for the line to go to
 // the other core and come back (two handoffs).
 void BM_LineRoundTrip(benchmark::State& state) {
   constexpr long kRounds = 20000;
   alignas(64) std::atomic<long> turn{0};
-  bool two = omp_get_num_procs() >= 2;
   for (auto _ : state) {
-    if (!two) break;
     turn.store(0);
-#pragma omp parallel num_threads(2)
-    {
-      if (omp_get_num_threads() != 2) {
-#pragma omp single
-        two = false;
-      } else {
-        const long me = omp_get_thread_num();
-        for (long k = 0; k < kRounds; ++k) {
-          const long mine = 2 * k + me;
-          while (turn.load(std::memory_order_acquire) != mine) {
-          }
-          turn.store(mine + 1, std::memory_order_release);
+    const bool ran = on_two_threads([&](long me) {
+      for (long k = 0; k < kRounds; ++k) {
+        const long mine = 2 * k + me;
+        while (turn.load(std::memory_order_acquire) != mine) {
         }
+        turn.store(mine + 1, std::memory_order_release);
       }
+    });
+    if (!ran) {
+      state.SkipWithError(kNeedsTwo);
+      break;
     }
-    if (!two) break;
   }
-  if (!two) {
-    state.SkipWithError("needs a team of 2 threads on 2 CPUs");
-    return;
-  }
+  if (state.error_occurred()) return;
   state.counters["round_trip_ns"] = benchmark::Counter(
       static_cast<double>(kRounds) * static_cast<double>(state.iterations()) * 1e-9,
       benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
@@ -141,40 +151,31 @@ BENCHMARK(BM_LineRoundTrip)->UseRealTime();
 // force sums the pair loop wrote): other:0 the same thread wrote them, other:1 the other thread
 // did. gb_per_s counts the reads only, timed apart from the writes.
 void BM_ReadAfterWrite(benchmark::State& state) {
-  const bool other = state.range(0) != 0;
-  const std::size_t n = std::size_t{1} << 21;  // 16 MB
+  const int reader = state.range(0) != 0 ? 1 : 0;  // thread 0 writes
+  const std::size_t n = std::size_t{1} << 21;      // 16 MB
   std::vector<double> a(n, 0.0);
   double read_s = 0, sink = 0;
-  bool two = omp_get_num_procs() >= 2;
   for (auto _ : state) {
-    if (!two) break;
-#pragma omp parallel num_threads(2)
-    {
-      if (omp_get_num_threads() != 2) {
-#pragma omp single
-        two = false;
-      } else {
-        const int writer = 0, reader = other ? 1 : 0;
-        if (omp_get_thread_num() == writer)
-          for (std::size_t i = 0; i < n; ++i) a[i] = static_cast<double>(i);
+    const bool ran = on_two_threads([&](int me) {
+      if (me == 0)
+        for (std::size_t i = 0; i < n; ++i) a[i] = static_cast<double>(i);
 #pragma omp barrier
-        if (omp_get_thread_num() == reader) {
-          const double t0 = omp_get_wtime();
-          double s[8] = {};  // 8 chains: the loads, not one add's latency, set the rate
-          for (std::size_t i = 0; i < n; i += 8)
-            for (int k = 0; k < 8; ++k) s[k] += a[i + k];
-          read_s += omp_get_wtime() - t0;
-          for (double v : s) sink += v;
-        }
+      if (me == reader) {
+        const double t0 = omp_get_wtime();
+        double s[8] = {};  // 8 chains: the loads, not one add's latency, set the rate
+        for (std::size_t i = 0; i < n; i += 8)
+          for (int k = 0; k < 8; ++k) s[k] += a[i + k];
+        read_s += omp_get_wtime() - t0;
+        for (double v : s) sink += v;
       }
+    });
+    if (!ran) {
+      state.SkipWithError(kNeedsTwo);
+      break;
     }
-    if (!two) break;
   }
+  if (state.error_occurred()) return;
   benchmark::DoNotOptimize(sink);
-  if (!two) {
-    state.SkipWithError("needs a team of 2 threads on 2 CPUs");
-    return;
-  }
   state.counters["gb_per_s"] = static_cast<double>(state.iterations()) *
                                static_cast<double>(n * sizeof(double)) * 1e-9 / read_s;
 }

@@ -98,7 +98,7 @@ PROBE_FILTER = "BM_LineRoundTrip|BM_ReadAfterWrite"
 
 def probe(machine, env):
     """Round trip (ns), read after the other core's write and after one's own (GB/s)."""
-    cmd = [machine, f"--benchmark_filter={PROBE_FILTER}", "--benchmark_format=json"]
+    cmd = command(machine, PROBE_FILTER)
     p = subprocess.run(cmd, env=env, capture_output=True, text=True)
     found = {}
     for b in benchmark_json(cmd, p.stdout, p.stderr, p.returncode, "ceiling.py"):
