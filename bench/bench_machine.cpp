@@ -181,6 +181,45 @@ void BM_ReadAfterWrite(benchmark::State& state) {
 }
 BENCHMARK(BM_ReadAfterWrite)->ArgName("other")->Arg(0)->Arg(1)->UseRealTime();
 
+// Whether the two threads have a core each or share one (two hardware threads of one core, which
+// a VM may not say: its lscpu reports what the hypervisor tells it). Thread 0 runs the multiply-add
+// chains of BM_Fma512 alone, then both threads run them at once; share = the two threads'
+// multiply-adds per second over one alone's. 12 chains keep one core's multiply-add units full, so
+// share is ~2 with a core each and ~1 on one core's two hardware threads.
+void BM_FmaShare(benchmark::State& state) {
+  if (!has_avx512()) {
+    state.SkipWithError("this CPU has no AVX-512F");
+    return;
+  }
+  long n = 1 << 20;
+  double alone_s = 0, both_s = 0, sink = 0;
+  for (auto _ : state) {
+    const bool ran = on_two_threads([&](int me) {
+      double t0 = omp_get_wtime();
+      if (me == 0) {
+        sink += chains<Op::Fma, 12>(n, 1.0);
+        alone_s += omp_get_wtime() - t0;
+      }
+#pragma omp barrier
+      t0 = omp_get_wtime();
+      const double v = chains<Op::Fma, 12>(n, 1.0 + me);
+#pragma omp barrier
+      if (me == 0) {
+        both_s += omp_get_wtime() - t0;
+        sink += v;
+      }
+    });
+    if (!ran) {
+      state.SkipWithError(kNeedsTwo);
+      break;
+    }
+  }
+  if (state.error_occurred()) return;
+  benchmark::DoNotOptimize(sink);
+  state.counters["share"] = 2 * alone_s / both_s;
+}
+BENCHMARK(BM_FmaShare)->UseRealTime();
+
 }  // namespace
 
 BENCHMARK_MAIN();

@@ -9,9 +9,11 @@ structure keeps of that. Each round runs, one after the other: the 1-thread benc
 two copies of it at once (pinned to CPUs 0 and 1 with taskset where it exists), the 2-thread
 benchmark. Medians over the rounds, and every round's ratios (these VMs change speed by 20-30 %
 from hour to hour, so only a round's own runs are compared). With --probe, each round starts
-with bench_machine's two placement figures: a cache line's round trip between the two threads
-and the rate of reading what the other core just wrote against one's own (a VM's two CPUs may
-sit near each other or far apart, and move between hours; docs/engine.md, "Five more tries").
+with bench_machine's placement figures: a cache line's round trip between the two threads, the
+rate of reading what the other core just wrote against one's own (a VM's two CPUs may sit near
+each other or far apart, and move between hours; docs/engine.md, "Five more tries"), and the
+multiply-add rate two threads get at once over one alone's (~2 on two cores, ~1 on two hardware
+threads of one core).
 
   bench/ceiling.py --build build --bench bench_tensile_film \\
       --one 'BM_RelaxedMediumFilm/threads:1/nps:1/morton:0/' \\
@@ -47,7 +49,7 @@ def parse_args(argv):
                     help="environment for the runs (repeat)")
     ap.add_argument("--probe", action="store_true",
                     help="each round, first measure where the two CPUs sit (bench_machine's "
-                    "BM_LineRoundTrip and BM_ReadAfterWrite, from the same build)")
+                    "BM_LineRoundTrip, BM_ReadAfterWrite and BM_FmaShare, from the same build)")
     a = ap.parse_args(argv)
     prog = os.path.join(a.build, "bench", a.bench)
     if not os.access(prog, os.X_OK):
@@ -93,11 +95,12 @@ def run_pair(cmd_a, cmd_b, env, names):
             for c, (o, e), p in zip((cmd_a, cmd_b), outs, procs)]
 
 
-PROBE_FILTER = "BM_LineRoundTrip|BM_ReadAfterWrite"
+PROBE_FILTER = "BM_LineRoundTrip|BM_ReadAfterWrite|BM_FmaShare"
 
 
 def probe(machine, env):
-    """Round trip (ns), read after the other core's write and after one's own (GB/s)."""
+    """Round trip (ns), read after the other core's write and after one's own (GB/s), and the
+    multiply-add rate two threads get at once over one alone's (~2 a core each, ~1 one core)."""
     cmd = command(machine, PROBE_FILTER)
     p = subprocess.run(cmd, env=env, capture_output=True, text=True)
     found = {}
@@ -108,7 +111,8 @@ def probe(machine, env):
     try:
         return (float(found["BM_LineRoundTrip"]["round_trip_ns"]),
                 float(found["BM_ReadAfterWrite/other:1"]["gb_per_s"]),
-                float(found["BM_ReadAfterWrite/other:0"]["gb_per_s"]))
+                float(found["BM_ReadAfterWrite/other:0"]["gb_per_s"]),
+                float(found["BM_FmaShare"]["share"]))
     except KeyError as e:
         sys.exit(f"ceiling.py: --probe: {' '.join(cmd)} gave no {e}")
 
@@ -125,7 +129,8 @@ def main(argv):
             placement.append(probe(a.machine, env))
             print(f"round {r + 1} of {a.rounds}: round trip {placement[-1][0]:.0f} ns, read after "
                   f"the other core's write {placement[-1][1]:.1f} GB/s, after its own "
-                  f"{placement[-1][2]:.1f}", file=sys.stderr)
+                  f"{placement[-1][2]:.1f}, multiply-add share {placement[-1][3]:.2f}",
+                  file=sys.stderr)
         one = run(command(prog, a.one), env, names)
         pair = run_pair(command(prog, a.one, 0), command(prog, a.one, 1), env, names)
         both = run(command(prog, a.two), env, names)
@@ -146,8 +151,8 @@ def main(argv):
     for name, v in rows:
         print(f"  {name:44s} median {med(v):.3f}   by round: " + ", ".join(f"{x:.3f}" for x in v))
     if placement:
-        print("  placement by round (round trip ns, other's / own GB/s): " + ", ".join(
-            f"{t:.0f} {o:.0f}/{w:.0f}" for t, o, w in placement))
+        print("  placement by round (round trip ns, other's / own GB/s, multiply-add share): " +
+              ", ".join(f"{t:.0f} {o:.0f}/{w:.0f} {s:.2f}" for t, o, w, s in placement))
     for name, v in phase.items():
         if phases:
             print(f"  {name:20s} " + "  ".join(
