@@ -25,6 +25,7 @@ inline void add_phase_counters(benchmark::State& state, const StepTimers& before
   state.counters["pair_ms"] = (after.pair_s - before.pair_s) / steps * 1e3;
   state.counters["neighbor_ms"] = (after.neighbor_s - before.neighbor_s) / steps * 1e3;
   state.counters["integrate_ms"] = (after.integrate_s - before.integrate_s) / steps * 1e3;
+  state.counters["updaters_ms"] = (after.updaters_s - before.updaters_s) / steps * 1e3;
 }
 
 }  // namespace mdem::bench

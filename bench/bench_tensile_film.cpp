@@ -57,6 +57,7 @@
 #include "mdem/job/prerelax_criterion.h"
 #include "mdem/job/tensile_job.h"
 #include "mdem/observe/aligned_pairs.h"
+#include "mdem/protocol/tensile_protocol.h"
 #include "mdem/scene/tensile_film.h"
 
 using namespace mdem;
@@ -296,6 +297,41 @@ void BM_RelaxedMediumFilm(benchmark::State& state) {
 BENCHMARK(BM_RelaxedMediumFilm)
     ->ArgNames({"threads", "nps", "morton"})
     ->ArgsProduct({{1, 2}, {0, 1}, {0, 1}})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(4);
+
+// The tensile test's step on the relaxed film: BM_RelaxedMediumFilm's system with the grips of
+// tensile.md §3.5 (15 nm from each end, the job's select_grips) and the monotonic grip protocol
+// (TensileProtocol, the job's loading of the medium film) as its updater, as the job's "tensile"
+// stage runs it (without its observers, which sample every few ps). Counters as
+// BM_RelaxedMediumFilm's, with updaters_ms (the protocol's share of a step) and grip_elements.
+void BM_TensileTestMediumFilm(benchmark::State& state) {
+  std::string error;
+  const long per_iteration = steps_per_iteration(error);
+  const double safety = error.empty() ? safety_factor(error) : 0.0;
+  if (!error.empty()) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  auto [f, rest, set] = film_case(state, safety);
+  Elements el = f.el;
+  const GripSelection grips = select_grips(el);
+  auto sys = tensile_film_system(std::move(el), set, kDashpot, rest.get());
+  TensileLoading loading;
+  loading.length = TensileFilmSpec::of_size(FilmSize::Medium).side;
+  sys->add_updater(std::make_shared<TensileProtocol>(loading));
+  sys->run(5);  // warm-up
+  const StepTimers t0 = sys->timers();
+  const double steps = bench::timed_steps(state, *sys, per_iteration);
+  bench::add_phase_counters(state, t0, sys->timers(), steps);
+  state.counters["grip_elements"] = static_cast<double>(grips.left.size() + grips.right.size());
+  state.counters["dt_fs"] = sys->dt() * 1e3;
+  state.counters["balance_error"] = sys->energy_balance_error();
+}
+BENCHMARK(BM_TensileTestMediumFilm)
+    ->ArgNames({"threads", "nps"})
+    ->ArgsProduct({{1, 2}, {0, 1}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond)
     ->Iterations(4);
