@@ -167,6 +167,55 @@ TEST(TensileKinematics, StartOnASystemThatHasRun) {
   EXPECT_EQ(p->phase(sys.time()), "ramp");
 }
 
+// The protocol keeps its grips' element indices from step to step: they must follow the
+// elements when the system reorders them mid-run (the grip elements, found by tag, stay on the
+// closed form and the others stay free), and a protocol moved to a system whose elements are in
+// another order must clamp that system's grip elements, not the old indices.
+TEST(TensileKinematics, GripsFollowReorderedElementsAndAnotherSystem) {
+  const TensileLoading l = monotonic(1e-4, 100);
+  Elements el = tube();
+  select_grips(el);
+  const Elements start = el;
+  auto expect_on_closed_form = [&](const System& sys, const TensileProtocol& p, double t_run) {
+    const Elements& now = sys.elements();
+    const double u = p.grip_displacement(sys.time());
+    ASSERT_GT(std::abs(u), 1e-4);
+    std::size_t clamped = 0;
+    for (const auto& [group, sign] : {std::pair{kGripLeft, -1.0}, std::pair{kGripRight, 1.0}})
+      for (std::uint64_t tag : now.groups.get(group)) {
+        const std::size_t i = now.index_of(tag), i0 = start.index_of(tag);
+        const Vec3 d = now.x[i] - start.x[i0];
+        EXPECT_NEAR(d.x(), sign * u, 1e-9 * std::abs(u)) << "tag " << tag << " at " << t_run;
+        EXPECT_EQ(d.y(), 0.0);
+        EXPECT_EQ(now.w[i].norm(), 0.0);
+      }
+    for (std::size_t i = 0; i < now.size(); ++i)
+      clamped += now.dof[i][0] == DofMode::Prescribed && now.dof[i][3] == DofMode::Fixed;
+    EXPECT_EQ(clamped, now.groups.get(kGripLeft).size() + now.groups.get(kGripRight).size());
+  };
+  // Reversed order: every grip index moves.
+  std::vector<std::uint32_t> reversed(el.size());
+  for (std::size_t k = 0; k < el.size(); ++k)
+    reversed[k] = static_cast<std::uint32_t>(el.size() - 1 - k);
+
+  System sys = tube_system(el);
+  auto p = std::make_shared<TensileProtocol>(l);
+  sys.add_updater(p);
+  sys.run(steps_for(60));
+  sys.reorder_elements(reversed);
+  sys.run(steps_for(60));
+  expect_on_closed_form(sys, *p, 120);
+
+  // A protocol that has clamped the reordered system, moved to a fresh one in the built order.
+  System sys2 = tube_system(el);
+  auto p2 = std::make_shared<TensileProtocol>(l);
+  p2->apply(sys, sys.time());  // p2 holds sys's (reversed) indices first
+  sys2.add_updater(p2);
+  p2->start(sys2);
+  sys2.run(steps_for(60));
+  expect_on_closed_form(sys2, *p2, 60);
+}
+
 TEST(TensileKinematics, VelocityIsC1AcrossTheRampEnd) {
   const double rate = 1e-4, ta = 100;
   Elements el = tube();

@@ -10,6 +10,7 @@
 #include "mdem/core/elements.h"
 #include "mdem/core/units.h"
 #include "mdem/force/bond/parallel_bond.h"
+#include "mdem/force/force_model.h"
 #include "mdem/integrate/system.h"
 #include "mdem/io/state_io.h"
 #include "mdem/observe/percentile.h"
@@ -32,6 +33,31 @@ void require_positive(double v, std::string_view field, std::string_view unit) {
 // S(τ) = τ³ − τ⁴/2: the ramp's strain over ε̇ t_a (the integral of the smoothstep).
 double ramp_integral(double tau) { return tau * tau * tau - 0.5 * tau * tau * tau * tau; }
 double smoothstep(double tau) { return tau * tau * (3.0 - 2.0 * tau); }
+
+// Clamps the grip elements ids (x velocity v.x(), y and z velocities 0, rotations fixed), whose
+// tags must be tags, in order; false when an index no longer holds its tag (that element is left
+// alone). Threaded: a grip of the medium film holds ~4800 elements, written every step.
+bool clamp_grip(Elements& el, const std::vector<std::size_t>& ids,
+                const std::vector<std::uint64_t>& tags, const Vec3& v) {
+  const long n = static_cast<long>(ids.size());
+  const std::size_t size = el.size();
+  bool ok = true;
+#pragma omp parallel for schedule(static) reduction(&& : ok) if (n >= kParallelMinItems)
+  for (long k = 0; k < n; ++k) {
+    const std::size_t i = ids[k];
+    if (i >= size || el.tag[i] != tags[k]) {
+      ok = false;
+      continue;
+    }
+    auto& dof = el.dof[i];
+    for (int d = 0; d < 3; ++d) {
+      dof[d] = DofMode::Prescribed;
+      dof[d + 3] = DofMode::Fixed;
+    }
+    el.v_prescribed[i] = v;
+  }
+  return ok;
+}
 
 }  // namespace
 
@@ -184,16 +210,25 @@ void TensileProtocol::apply(System& sys, double t) {
   double dt = sys.dt();
   if (!(dt > 0) && sys.settings().dt) dt = *sys.settings().dt;
   const double v = grip_velocity(elapsed(t), dt);
-  for (const auto& [name, sign] : {std::pair{kGripLeft, -1.0}, std::pair{kGripRight, 1.0}}) {
-    for (std::size_t i : el.group_indices(name)) {
-      auto& dof = el.dof[i];
-      for (int k = 0; k < 3; ++k) {
-        dof[k] = DofMode::Prescribed;
-        dof[k + 3] = DofMode::Fixed;
-      }
-      el.v_prescribed[i] = Vec3(sign * v, 0, 0);
-    }
+  const std::vector<std::uint64_t>* tags[2] = {&el.groups.get(kGripLeft),
+                                               &el.groups.get(kGripRight)};
+  // The indices kept from the step before, each checked against its tag as it is used: found
+  // anew when any is stale (the first step, another system, elements reordered behind the
+  // protocol's back). Clamping is idempotent, so a partly done first try does no harm.
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    bool ok = true;
+    for (int g = 0; g < 2; ++g)
+      ok = grip_[g].size() == tags[g]->size() &&
+           clamp_grip(el, grip_[g], *tags[g], Vec3(g == 0 ? -v : v, 0, 0)) && ok;
+    if (ok) return;
+    for (int g = 0; g < 2; ++g) grip_[g] = el.group_indices(g == 0 ? kGripLeft : kGripRight);
   }
+}
+
+void TensileProtocol::reorder(std::span<const std::uint32_t> old_to_new) {
+  for (auto& ids : grip_)
+    for (std::size_t& i : ids)
+      if (i < old_to_new.size()) i = old_to_new[i];  // out of range: stale, found anew
 }
 
 std::string TensileProtocol::phase(double t) const {

@@ -20,6 +20,8 @@
 // at every step (to rounding), however the rate changes. Before the step is known (dt = 0 and no
 // dt in the settings, at the first initialisation) the instantaneous derivative is used.
 #include <cstddef>
+#include <cstdint>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -101,8 +103,12 @@ class TensileProtocol final : public Protocol {
   bool started() const { return started_; }
   double start_time() const { return start_; }
 
-  // The updater: the grip DOF modes and velocities for the step from system time t.
+  // The updater: the grip DOF modes and velocities for the step from system time t. The grips'
+  // element indices are kept from call to call (found from the groups at the first, and again
+  // whenever one no longer holds its group's tag) and follow a reordering of the elements.
   void apply(System& sys, double t) override;
+  bool follows_reorder() const override { return true; }
+  void reorder(std::span<const std::uint32_t> old_to_new) override;
   bool reads_forces() const override { return false; }   // grip motion from the time alone
   bool applies_loads() const override { return false; }  // prescribed motion, no loads
   // "ramp", "straining" (monotonic); "cycle k/n", then "done" (cyclic).
@@ -125,6 +131,7 @@ class TensileProtocol final : public Protocol {
   TensileLoading loading_;
   double start_ = 0;
   bool started_ = false;
+  std::vector<std::size_t> grip_[2];  // the left and right grips' element indices
 };
 
 }  // namespace mdem
