@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -34,13 +35,17 @@ struct Case {
 
 struct Marked {
   std::size_t fixed, prescribed, partial, loaded, toggled, anisotropic;
+  std::vector<std::size_t> clamped;  // translation prescribed, rotation fixed: a tensile grip's
 };
 
 // Three bonded 12-segment tubes at the vdW contact distance (or a 2400-segment film), with ~300 K
 // random velocities and spins, and one element of every class: fixed; translation and rotation
 // prescribed; one translation prescribed and one rotation fixed; free under an external force and
 // torque; free but held prescribed by a protocol for a while and released; an anisotropic free
-// body (a grain, which no model acts on) spinning about a non-principal axis.
+// body (a grain, which no model acts on) spinning about a non-principal axis. And clamped
+// elements (translation prescribed at a velocity the protocol changes every step, rotation
+// fixed, as a tensile grip's; the lanes run them): in a chunk with free ones, and (film) runs of
+// them, within and across chunks.
 System mixed_scene(const Case& cs, bool fast, Marked& mk) {
   Elements el;
   if (cs.big) {
@@ -56,7 +61,18 @@ System mixed_scene(const Case& cs, bool fast, Marked& mk) {
     el.f_ext[i] = Vec3(0.05, -0.1, 0.02) * static_cast<double>(1 + i % 3);
     el.t_ext[i] = Vec3(-0.01, 0.005, 0.015) * static_cast<double>(1 + i % 5);
   }
-  mk = {0, 11, 17, 20, 30, 0};
+  mk = {0, 11, 17, 20, 30, 0, {}};
+  if (cs.big) {
+    for (std::size_t i = 100; i < 140; ++i) mk.clamped.push_back(i);
+    for (std::size_t i : {205, 213, 1000, 1001, 2390}) mk.clamped.push_back(i);
+  } else {
+    mk.clamped = {25, 26};  // in the chunk of elements 24-31, with the toggled element
+  }
+  for (std::size_t i : mk.clamped)
+    for (int k = 0; k < 3; ++k) {
+      el.dof[i][k] = DofMode::Prescribed;
+      el.dof[i][k + 3] = DofMode::Fixed;
+    }
   el.fix_all(mk.fixed);
   for (int k = 0; k < 6; ++k) el.dof[mk.prescribed][k] = DofMode::Prescribed;
   el.v_prescribed[mk.prescribed] = Vec3(0.01, -0.02, 0.005);
@@ -104,6 +120,9 @@ System mixed_scene(const Case& cs, bool fast, Marked& mk) {
     const bool held = t >= 0.1 && t < 0.3;
     for (int k = 0; k < 3; ++k) e.dof[m.toggled][k] = held ? DofMode::Prescribed : DofMode::Free;
     e.v_prescribed[m.toggled] = Vec3(0.02, 0.0, -0.01);
+    for (std::size_t i : m.clamped)
+      e.v_prescribed[i] = Vec3(0.03 * std::sin(12 * t) * (i % 2 ? 1.0 : -1.0),
+                               0.01 * std::cos(9 * t), -0.02 * std::sin(7 * t));
   });
   return sys;
 }
@@ -155,7 +174,12 @@ void compare_paths(const Case& cs, long steps) {
     for (DofMode d : E.dof[i]) all_free = all_free && d == DofMode::Free;
     free_isotropic += all_free && E.is_isotropic(i);
   }
-  EXPECT_EQ(free_isotropic, E.size() - 4);  // fixed, prescribed, partial, anisotropic
+  // fixed, prescribed, partial, anisotropic, clamped
+  EXPECT_EQ(free_isotropic, E.size() - 4 - mk.clamped.size());
+  for (std::size_t i : mk.clamped) {
+    EXPECT_EQ(E.w[i].norm(), 0.0) << i;
+    EXPECT_NE(E.v[i].x(), 0.0) << i;
+  }
   for (std::size_t i = E.size() - (cs.spinners ? 16 : 0); i < E.size(); ++i)
     EXPECT_GT(E.w[i].norm() * fast.dt(), 0.1) << i;
   EXPECT_FALSE(E.is_isotropic(mk.anisotropic));

@@ -124,14 +124,9 @@ HWY_INLINE void book(const V (&v)[K], double* const (&sum)[K]) {
   for (int k = 0; k < K; ++k) *sum[k] = acc[k];
 }
 
-// Whether every element of the chunk at i has six free DOFs and isotropic inertia
-// (step::free_isotropic); inertia is set to the chunk's.
-HWY_INLINE bool free_isotropic(const Pass& p, long i, V3& inertia) {
+// Whether the chunk at i has isotropic inertia (set to the chunk's).
+HWY_INLINE bool isotropic(const Pass& p, long i, V3& inertia) {
   const D d;
-  const std::size_t n = hn::Lanes(d);
-  unsigned char any = 0;
-  for (std::size_t b = 0; b < 6 * n; ++b) any |= p.dof[6 * i + b];
-  if (any != 0) return false;
   inertia = load3(p.inertia, i);
   const V tol = hn::Set(d, 1e-12) * inertia.x;
   const auto iso = hn::And(hn::Le(hn::Abs(inertia.x - inertia.y), tol),
@@ -139,12 +134,64 @@ HWY_INLINE bool free_isotropic(const Pass& p, long i, V3& inertia) {
   return hn::AllTrue(d, iso);
 }
 
-// The chunk at i; false (nothing written) when a lane leaves the common branches.
-template <bool kSecond, bool kFirst>
-HWY_INLINE bool chunk(const Pass& p, long i, double* s2, double* s1, long* runaway) {
+// Whether no element of the chunk at i has a DOF other than free (step::free_isotropic's test).
+HWY_INLINE bool all_free(const Pass& p, long i) {
+  const std::size_t n = hn::Lanes(D());
+  unsigned char any = 0;
+  for (std::size_t b = 0; b < 6 * n; ++b) any |= p.dof[6 * i + b];
+  return any == 0;
+}
+
+// Whether every element of the chunk at i is free or clamped (translation prescribed, rotation
+// fixed: a tensile grip's element); clamped is set to 1 in the clamped lanes and 0 in the others.
+HWY_INLINE bool free_or_clamped(const Pass& p, long i, V& clamped) {
   const D d;
-  V3 I3;
-  if (!free_isotropic(p, i, I3)) return false;
+  const std::size_t n = hn::Lanes(d);
+  constexpr unsigned char P = kDofPrescribed, F = kDofFixed;
+  constexpr unsigned char kClamp[6] = {P, P, P, F, F, F};
+  HWY_ALIGN double c[kMax];
+  for (std::size_t l = 0; l < n; ++l) {
+    const unsigned char* m = p.dof + 6 * (i + static_cast<long>(l));
+    unsigned char any = 0;
+    for (int k = 0; k < 6; ++k) any |= m[k];
+    if (any != 0 && std::memcmp(m, kClamp, 6) != 0) return false;
+    c[l] = any != 0 ? 1.0 : 0.0;
+  }
+  clamped = hn::Load(d, c);
+  return true;
+}
+
+// A clamped element's half kick of its translation (first_half_kick / second_half_kick,
+// Prescribed: the velocity set to vp, the constraint's work and the kinetic energy it injects
+// booked in the scalar kernels' order; its rotation, Fixed, books no work) and the share of its
+// work book; the damping terms are the free kicks' expressions at the clamped velocities.
+template <bool kFirst>
+HWY_INLINE V clamped_kick(V3& v, const V3& f, const V3& fd, const V3& vp, V m, V h) {
+  const V half_m = hn::Set(D(), 0.5) * m;
+  V work = hn::Zero(D());
+  V* vs[3] = {&v.x, &v.y, &v.z};
+  const V* fs[3] = {&f.x, &f.y, &f.z};
+  const V* fds[3] = {&fd.x, &fd.y, &fd.z};
+  const V* vps[3] = {&vp.x, &vp.y, &vp.z};
+  for (int k = 0; k < 3; ++k) {
+    const V v0 = *vs[k], p = *vps[k];
+    const V injected = half_m * ((p * p) - (v0 * v0));  // ½ m (vp² − v0²)
+    // The constraint's work, −(F + F_damp) v h, at the velocity after the kick (first half) or
+    // before it (second half).
+    const V constraint = ((*fs[k] + *fds[k]) * (kFirst ? p : v0)) * h;
+    work = kFirst ? (work + injected) - constraint : (work - constraint) + injected;
+    *vs[k] = p;
+  }
+  return work;
+}
+
+// The chunk at i, whose lanes are isotropic (inertia I3) and free, or with kClamped free or
+// clamped (the lanes of `clamped`); without kClamped none of the clamped arithmetic is compiled
+// in. False (nothing written) when a lane leaves the common branches.
+template <bool kSecond, bool kFirst, bool kClamped>
+HWY_INLINE bool chunk(const Pass& p, long i, const V3& I3, hn::Mask<D> clamped, double* s2,
+                      double* s1, long* runaway) {
+  const D d;
   const V h = hn::Set(d, p.h);
   const V zero = hn::Zero(d);
   const V m = hn::LoadU(d, p.mass + i), inv_m = hn::LoadU(d, p.inv_mass + i);
@@ -166,17 +213,44 @@ HWY_INLINE bool chunk(const Pass& p, long i, double* s2, double* s1, long* runaw
           : !sink_damp           ? load3(p.td, i)
           : p.sink_td != nullptr ? thread_sum(p.sink_td, nt, i)
                                  : none;
+  const V3 vp = kClamped ? load3(p.v_prescribed, i) : none;
+  // The clamped lanes' kicks (clamped_kick) replace the free ones' results in those lanes: the
+  // velocities (the rotation's zero), the damping terms and the share of the work book (cw).
+  const auto clamp = [&]<bool kF>(V3 & vel, V3 & ang, const V3& v_in, const V3& w_in, Terms& s,
+                                  V& cw) __attribute__((always_inline)) {
+    V3 vc = v_in;
+    cw = clamped_kick<kF>(vc, f, fd, vp, m, h);
+    const V3* dv = kF ? &v_in : &vc;  // the damping's velocity: before or after the kick
+    const V3 dw = kF ? w_in : none;
+    const V cd[6] = {(fd.x * dv->x) * h, (fd.y * dv->y) * h, (fd.z * dv->z) * h,
+                     (td.x * dw.x) * h,  (td.y * dw.y) * h,  (td.z * dw.z) * h};
+    for (int k = 0; k < 6; ++k) s.diss[k] = hn::IfThenElse(clamped, cd[k], s.diss[k]);
+    vel = {hn::IfThenElse(clamped, vc.x, vel.x), hn::IfThenElse(clamped, vc.y, vel.y),
+           hn::IfThenElse(clamped, vc.z, vel.z)};
+    ang = {hn::IfThenElseZero(hn::Not(clamped), ang.x), hn::IfThenElseZero(hn::Not(clamped), ang.y),
+           hn::IfThenElseZero(hn::Not(clamped), ang.z)};
+  };
   Terms t2, t1;
+  V cw2 = zero, cw1 = zero;  // the clamped lanes' work shares
   V kt = zero, kr = zero;
   if constexpr (kSecond) {
-    if (damped) {  // local_damping
+    if (damped) {  // local_damping, of the free DOFs only
       const V a = hn::Set(d, p.alpha);
+      const V3 fd0 = fd, td0 = td;
       fd = {damp(f.x, fe.x, fd.x, v.x, a), damp(f.y, fe.y, fd.y, v.y, a),
             damp(f.z, fe.z, fd.z, v.z, a)};
       td = {damp(t.x, te.x, td.x, w.x, a), damp(t.y, te.y, td.y, w.y, a),
             damp(t.z, te.z, td.z, w.z, a)};
+      if constexpr (kClamped) {
+        fd = {hn::IfThenElse(clamped, fd0.x, fd.x), hn::IfThenElse(clamped, fd0.y, fd.y),
+              hn::IfThenElse(clamped, fd0.z, fd.z)};
+        td = {hn::IfThenElse(clamped, td0.x, td.x), hn::IfThenElse(clamped, td0.y, td.y),
+              hn::IfThenElse(clamped, td0.z, td.z)};
+      }
     }
+    const V3 v_in = v, w_in = w;
     kicks<false>(v, w, f, t, fe, te, fd, td, inv_m, inv_I, h, t2);
+    if constexpr (kClamped) clamp.template operator()<false>(v, w, v_in, w_in, t2, cw2);
     const V half = hn::Set(d, 0.5);
     kt = (half * m) * sq3(v);
     kr = (half * I) * sq3(w);
@@ -187,7 +261,9 @@ HWY_INLINE bool chunk(const Pass& p, long i, double* s2, double* s1, long* runaw
   V3 x{}, dx{};
   V qx = zero, qy = zero, qz = zero, qw = zero;
   if constexpr (kFirst) {
+    const V3 v_in = v, w_in = w;
     kicks<true>(v, w, f, t, fe, te, fd, td, inv_m, inv_I, h, t1);
+    if constexpr (kClamped) clamp.template operator()<true>(v, w, v_in, w_in, t1, cw1);
     const V dt = hn::Set(d, p.dt);
     dx = {v.x * dt, v.y * dt, v.z * dt};
     x = load3(p.x, i);
@@ -243,18 +319,24 @@ HWY_INLINE bool chunk(const Pass& p, long i, double* s2, double* s1, long* runaw
   }
   store3(v, p.v, i);
   store3(w, p.w, i);
+  // Each pass's shares: the clamped lanes' work from clamped_kick.
+  const auto pass_shares = [&](const Terms& s, V cw, V& work, V& diss)
+      __attribute__((always_inline)) {
+    shares(s, work, diss);
+    if constexpr (kClamped) work = hn::IfThenElse(clamped, cw, work);
+  };
   if constexpr (kSecond && kFirst) {
     V w2, d2, w1, d1;
-    shares(t2, w2, d2);
-    shares(t1, w1, d1);
+    pass_shares(t2, cw2, w2, d2);
+    pass_shares(t1, cw1, w1, d1);
     book<6>({w2, d2, kt, kr, w1, d1}, {s2, s2 + 1, s2 + 2, s2 + 3, s1, s1 + 1});
   } else if constexpr (kSecond) {
     V w2, d2;
-    shares(t2, w2, d2);
+    pass_shares(t2, cw2, w2, d2);
     book<4>({w2, d2, kt, kr}, {s2, s2 + 1, s2 + 2, s2 + 3});
   } else {
     V w1, d1;
-    shares(t1, w1, d1);
+    pass_shares(t1, cw1, w1, d1);
     book<2>({w1, d1}, {s1, s1 + 1});
   }
   if constexpr (kFirst) {
@@ -274,10 +356,30 @@ HWY_INLINE bool chunk(const Pass& p, long i, double* s2, double* s1, long* runaw
   return true;
 }
 
+// A chunk with an element that is not free: run in lanes when every element is free or clamped
+// (and isotropic). Out of line, so that the free chunks' loop stays as compact as without it.
+template <bool kSecond, bool kFirst>
+HWY_NOINLINE bool clamped_chunk(const Pass& p, long i, double* s2, double* s1, long* runaway) {
+  V clamped;
+  V3 inertia;
+  if (!free_or_clamped(p, i, clamped) || !isotropic(p, i, inertia)) return false;
+  return chunk<kSecond, kFirst, true>(p, i, inertia, hn::Gt(clamped, hn::Zero(D())), s2, s1,
+                                      runaway);
+}
+
+// The chunk at i, whichever its lanes' classes; false when it goes to the scalar kernels.
+template <bool kSecond, bool kFirst>
+HWY_INLINE bool any_chunk(const Pass& p, long i, double* s2, double* s1, long* runaway) {
+  if (!all_free(p, i)) return clamped_chunk<kSecond, kFirst>(p, i, s2, s1, runaway);
+  V3 inertia;
+  if (!isotropic(p, i, inertia)) return false;
+  return chunk<kSecond, kFirst, false>(p, i, inertia, hn::FirstN(D(), 0), s2, s1, runaway);
+}
+
 template <bool kSecond, bool kFirst>
 long RunChunks(const Pass& p, long i, long e, double* s2, double* s1, long* runaway) {
   const long n = static_cast<long>(hn::Lanes(D()));
-  while (i + n <= e && chunk<kSecond, kFirst>(p, i, s2, s1, runaway)) i += n;
+  while (i + n <= e && any_chunk<kSecond, kFirst>(p, i, s2, s1, runaway)) i += n;
   return i;
 }
 

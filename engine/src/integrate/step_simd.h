@@ -6,7 +6,9 @@
 // -ffp-contract=off), and each element's share of the energy books is added to them in element
 // order, so the results are the scalar path's bit for bit (test_step_fast_path).
 //
-// A chunk of lanes is run only when every element in it is free and isotropic and takes the
+// A chunk of lanes is run only when every element in it is isotropic, either free or clamped
+// (translation prescribed, rotation fixed: a tensile grip's element, whose lanes take
+// first_half_kick's and second_half_kick's Prescribed and Fixed branches), and takes the
 // common branches (orientation drift below 0.1 rad, renormalisation by the series, finite
 // velocities); otherwise nothing of the chunk is written and the caller runs it with the scalar
 // kernels, which also name what went wrong.
@@ -14,11 +16,15 @@
 
 namespace mdem::step_simd {
 
+// DofMode's values (static_assert in system.cpp): the free ones are 0.
+inline constexpr unsigned char kDofFixed = 1, kDofPrescribed = 2;
+
 // One pass over the elements: the arrays of Elements and of the system's damping buffers as
 // doubles (a Vec3 is 3, a quaternion x, y, z, w), and the pass's settings.
 struct Pass {
   double *x, *q, *v, *w, *f, *t, *fd, *td;
   const double *f_ext, *t_ext, *mass, *inv_mass, *inertia, *radius;  // f_ext, t_ext null: all zero
+  const double* v_prescribed;                                        // read in clamped lanes only
   const unsigned char* dof;  // 6 DofMode bytes per element (Free = 0)
   // The force evaluation's per-thread buffers when its sums are still to be taken
   // (ForceSink::take): sink[k] for thread k, force, torque, and the damping force and torque

@@ -78,10 +78,10 @@ auto each(const Body& body) {
   };
 }
 
-// A range body that runs whole chunks of free isotropic elements in SIMD lanes (step_simd.h)
-// where `pass` is set, and the others, and what the lanes leave, element by element. The body's
-// sums start with the pass's own (pass 2's when it runs, else pass 1's); kS1: where pass 1's
-// start when both run.
+// A range body that runs whole chunks of free (or clamped) isotropic elements in SIMD lanes
+// (step_simd.h) where `pass` is set, and the others, and what the lanes leave, element by element.
+// The body's sums start with the pass's own (pass 2's when it runs, else pass 1's); kS1: where pass
+// 1's start when both run.
 template <std::size_t kS1, class Body>
 auto chunked(const step_simd::Pass* pass, long lanes, const Body& body) {
   return [ pass, lanes, body ](long b, long e, auto& s, auto& marks)
@@ -104,6 +104,8 @@ step_simd::Pass lanes_pass(const step::StepContext& c, bool second, bool first, 
                            std::vector<double*>& buffers) {
   static_assert(sizeof(Vec3) == 3 * sizeof(double) && sizeof(Quat) == 4 * sizeof(double));
   static_assert(sizeof(std::array<DofMode, 6>) == 6);
+  static_assert(static_cast<unsigned char>(DofMode::Fixed) == step_simd::kDofFixed &&
+                static_cast<unsigned char>(DofMode::Prescribed) == step_simd::kDofPrescribed);
   Elements& E = *c.E;
   auto d = [](auto& v) { return reinterpret_cast<double*>(v.data()); };
   auto cd = [](const auto& v) { return reinterpret_cast<const double*>(v.data()); };
@@ -122,6 +124,7 @@ step_simd::Pass lanes_pass(const step::StepContext& c, bool second, bool first, 
   p.inv_mass = E.inv_mass.data();
   p.inertia = cd(E.inertia);
   p.radius = E.radius.data();
+  p.v_prescribed = cd(E.v_prescribed);
   p.dof = reinterpret_cast<const unsigned char*>(E.dof.data());
   if (second && c.sink) {
     const int nt = c.sink->threads();
