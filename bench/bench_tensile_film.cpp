@@ -255,14 +255,20 @@ FilmCase film_case(const benchmark::State& state, double safety) {
   return c;
 }
 
-void BM_RelaxedMediumFilm(benchmark::State& state) {
+// The stepping benchmarks' settings from the environment: steps per timed iteration and the
+// safety factor; false, the benchmark skipped with the message, when either is not allowed.
+bool stepping_settings(benchmark::State& state, long& per_iteration, double& safety) {
   std::string error;
-  const long per_iteration = steps_per_iteration(error);
-  const double safety = error.empty() ? safety_factor(error) : 0.0;
-  if (!error.empty()) {
-    state.SkipWithError(error.c_str());
-    return;
-  }
+  per_iteration = steps_per_iteration(error);
+  safety = error.empty() ? safety_factor(error) : 0.0;
+  if (!error.empty()) state.SkipWithError(error.c_str());
+  return error.empty();
+}
+
+void BM_RelaxedMediumFilm(benchmark::State& state) {
+  long per_iteration = 0;
+  double safety = 0;
+  if (!stepping_settings(state, per_iteration, safety)) return;
   auto [f, rest, set] = film_case(state, safety);
   if (state.range(2) != 0) set.memory_order = MemoryOrder::Morton;
   auto sys = tensile_film_system(f.el, set, kDashpot, rest.get());
@@ -307,13 +313,9 @@ BENCHMARK(BM_RelaxedMediumFilm)
 // stage runs it (without its observers, which sample every few ps). Counters as
 // BM_RelaxedMediumFilm's, with updaters_ms (the protocol's share of a step) and grip_elements.
 void BM_TensileTestMediumFilm(benchmark::State& state) {
-  std::string error;
-  const long per_iteration = steps_per_iteration(error);
-  const double safety = error.empty() ? safety_factor(error) : 0.0;
-  if (!error.empty()) {
-    state.SkipWithError(error.c_str());
-    return;
-  }
+  long per_iteration = 0;
+  double safety = 0;
+  if (!stepping_settings(state, per_iteration, safety)) return;
   auto [f, rest, set] = film_case(state, safety);
   Elements el = f.el;
   const GripSelection grips = select_grips(el);
