@@ -227,8 +227,8 @@ HWY_INLINE bool chunk(const Pass& p, long i, const V3& I3, hn::Mask<D> clamped, 
     for (int k = 0; k < 6; ++k) s.diss[k] = hn::IfThenElse(clamped, cd[k], s.diss[k]);
     vel = {hn::IfThenElse(clamped, vc.x, vel.x), hn::IfThenElse(clamped, vc.y, vel.y),
            hn::IfThenElse(clamped, vc.z, vel.z)};
-    ang = {hn::IfThenElseZero(hn::Not(clamped), ang.x), hn::IfThenElseZero(hn::Not(clamped), ang.y),
-           hn::IfThenElseZero(hn::Not(clamped), ang.z)};
+    ang = {hn::IfThenZeroElse(clamped, ang.x), hn::IfThenZeroElse(clamped, ang.y),
+           hn::IfThenZeroElse(clamped, ang.z)};
   };
   Terms t2, t1;
   V cw2 = zero, cw1 = zero;  // the clamped lanes' work shares
