@@ -1,7 +1,8 @@
-// Memory order (issue 13 item 3): the tag -> index map, Elements::reorder, the Morton order over
-// the neighbour search's cells, and a system that reorders its elements at neighbour-list rebuilds
-// (IntegratorSettings::memory_order) with ids preserved: snapshots and checkpoints in tag order,
-// the physics unchanged to round-off, runs repeating bit for bit, resumes bit-identical.
+// Memory order (issue 13 items 3, 4): the tag -> index map, Elements::reorder, the Morton order
+// over the neighbour search's cells, the slab order (one slab of space per thread), and a system
+// that reorders its elements at neighbour-list rebuilds (IntegratorSettings::memory_order) with ids
+// preserved: snapshots and checkpoints in tag order, the physics unchanged to round-off, runs
+// repeating bit for bit, resumes bit-identical.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -199,6 +200,111 @@ TEST(MortonOrder, RefusesBadCellsAndNonFinitePositionsAndCopesWithHugeOnes) {
   }
 }
 
+// The slab order: a permutation into `slabs` runs of equal size (to within one) along the widest
+// axis, every element of a run at or below the next run's along it, tag order within each run;
+// one slab is the tag order; ordering the ordered elements again changes nothing.
+TEST(SlabOrder, CutsTheWidestAxisIntoEqualSlabsInTagOrder) {
+  const Elements scrambled = film(true);  // 90 × 90 × 6 nm
+  const Domain periodic_xy(Vec3(-45, -45, -3), Vec3(45, 45, 3), {true, true, false});
+  const Domain periodic_z(Vec3(-45, -45, -200), Vec3(45, 45, 200), {false, false, true});
+  // Without a periodic axis, the widest extent of the positions.
+  Vec3 lo = scrambled.x[0], hi = lo;
+  for (const Vec3& x : scrambled.x) {
+    lo = lo.cwiseMin(x);
+    hi = hi.cwiseMax(x);
+  }
+  int widest = 0;
+  (hi - lo).maxCoeff(&widest);
+  struct Case {
+    Domain domain;
+    int axis;
+  };
+  for (const Case& c : {Case{Domain{}, widest}, Case{periodic_xy, 0}, Case{periodic_z, 2}}) {
+    for (int slabs : {1, 2, 3, 7}) {
+      SCOPED_TRACE("slabs " + std::to_string(slabs) + ", axis " + std::to_string(c.axis));
+      const std::vector<std::uint32_t> order = slab_order(scrambled, slabs, c.domain);
+      ASSERT_TRUE(is_permutation_of(order, scrambled.size()));
+      const std::size_t n = order.size();
+      auto coord = [&](std::uint32_t i) {
+        return (c.domain.any_periodic() ? c.domain.wrap(scrambled.x[i]) : scrambled.x[i])[c.axis];
+      };
+      for (int s = 0; s < slabs; ++s) {
+        const std::size_t b = n * s / slabs, e = n * (s + 1) / slabs;
+        for (std::size_t k = b + 1; k < e; ++k)
+          ASSERT_LT(scrambled.tag[order[k - 1]], scrambled.tag[order[k]]) << "slab " << s;
+        if (e < n) {
+          double top = -1e300, next = 1e300;
+          for (std::size_t k = b; k < e; ++k) top = std::max(top, coord(order[k]));
+          for (std::size_t k = e; k < n; ++k) next = std::min(next, coord(order[k]));
+          EXPECT_LE(top, next) << "slab " << s;
+        }
+      }
+      Elements sorted = scrambled;
+      sorted.reorder(order);
+      EXPECT_TRUE(is_identity_order(slab_order(sorted, slabs, c.domain)));
+      if (slabs == 1) {
+        EXPECT_EQ(order, scrambled.tag_order());
+      }
+    }
+  }
+}
+
+TEST(SlabOrder, RefusesBadSlabCountsAndNonFinitePositions) {
+  Elements el = film(false);
+  for (int bad : {0, -1, 65537})
+    EXPECT_THROW((void)slab_order(el, bad), std::invalid_argument) << bad;
+  el.x[5].y() = std::numeric_limits<double>::infinity();
+  try {
+    (void)slab_order(el, 2);
+    ADD_FAILURE() << "an infinite position was ordered";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("element 5"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(slab_order(Elements{}, 4).empty());
+}
+
+// In slabs on 2 threads, each thread's even share of the elements is one half of the film along
+// x, and the run agrees with the film run as built on 1 thread to round-off.
+TEST(MemoryOrder, SlabsGiveEachThreadOneHalfAndAgreeToRoundOff) {
+  constexpr long kSteps = 150;
+  auto plain = film_system(film(false), MemoryOrder::AsBuilt, 1);
+  auto slabs = film_system(film(true), MemoryOrder::Slabs, 2);
+  const Momenta m0 = momenta(slabs->elements());
+  plain->run(kSteps);
+  slabs->run(kSteps);
+  EXPECT_GE(slabs->reorders(), 2u);
+  const Elements& e = slabs->elements();
+  const std::size_t half = e.size() / 2;
+  // The widest axis of the positions (no periodic axis here; it was so at the last reorder too:
+  // the elements have moved less than a nm since).
+  Vec3 lo = e.x[0], hi = lo;
+  for (const Vec3& x : e.x) {
+    lo = lo.cwiseMin(x);
+    hi = hi.cwiseMax(x);
+  }
+  int axis = 0;
+  const double widest = (hi - lo).maxCoeff(&axis);
+  for (int d = 0; d < 3; ++d) {
+    if (d != axis) {
+      ASSERT_LT(hi[d] - lo[d], widest - 2.0) << "no one widest axis";
+    }
+  }
+  // Positions have moved since the last reorder (every second rebuild): at most a skin apart.
+  double top = -1e300, bottom = 1e300;
+  for (std::size_t k = 0; k < half; ++k) top = std::max(top, e.x[k][axis]);
+  for (std::size_t k = half; k < e.size(); ++k) bottom = std::min(bottom, e.x[k][axis]);
+  EXPECT_LT(top, bottom + IntegratorSettings{}.skin);
+  EXPECT_GT(top - lo[axis], 0.3 * widest);  // not a degenerate split
+  const Snapshot a = capture_snapshot(plain->elements(), kSteps, 0);
+  const Snapshot b = capture_snapshot(e, kSteps, 0);
+  const double d = max_position_difference(a, b);
+  EXPECT_LT(d, 1e-10);
+  RecordProperty("max_position_difference_slabs_nm", sci(d));
+  const Momenta m1 = momenta(e);
+  EXPECT_LT((m1.p - m0.p).norm(), 1e-12 * m0.scale);
+  EXPECT_LT((m1.l - m0.l).norm(), 1e-12 * m0.scale);
+}
+
 // The same film run as built, with its elements scrambled in memory, and reordered along the
 // Morton curve at every second rebuild: the snapshots (tag order) agree to round-off, and the
 // reordered run conserves momentum and angular momentum.
@@ -267,39 +373,44 @@ TEST(MemoryOrder, ReordersAtTheFirstBuildThenEveryTenth) {
 
 // With reordering on, a run repeats bit for bit at 1 and at 2 threads.
 TEST(MemoryOrder, ReorderedRunsRepeatBitForBitAtOneAndTwoThreads) {
-  for (int threads : {1, 2}) {
-    auto first = film_system(film(true), MemoryOrder::Morton, threads);
-    auto second = film_system(film(true), MemoryOrder::Morton, threads);
-    first->run(80);
-    second->run(80);
-    EXPECT_GE(first->reorders(), 2u);
-    EXPECT_EQ(first->elements().tag, second->elements().tag) << threads << " threads";
-    EXPECT_TRUE(bitwise_equal(capture_snapshot(first->elements(), 80, 0),
-                              capture_snapshot(second->elements(), 80, 0)))
-        << threads << " threads";
-  }
+  for (MemoryOrder order : {MemoryOrder::Morton, MemoryOrder::Slabs})
+    for (int threads : {1, 2}) {
+      SCOPED_TRACE(std::string(to_string(order)) + ", " + std::to_string(threads) + " threads");
+      auto first = film_system(film(true), order, threads);
+      auto second = film_system(film(true), order, threads);
+      first->run(80);
+      second->run(80);
+      // Slabs on 1 thread: the tag order, reached at the first build and kept.
+      EXPECT_GE(first->reorders(), order == MemoryOrder::Slabs && threads == 1 ? 1u : 2u);
+      EXPECT_EQ(first->elements().tag, second->elements().tag);
+      EXPECT_TRUE(bitwise_equal(capture_snapshot(first->elements(), 80, 0),
+                                capture_snapshot(second->elements(), 80, 0)));
+    }
 }
 
 // A checkpoint written after reorders resumes bit-identically (the memory order is restored, so
 // the same pairs are summed in the same order), in a system that had reordered otherwise.
 TEST(MemoryOrder, CheckpointAfterAReorderResumesBitIdentically) {
-  auto run = film_system(film(true), MemoryOrder::Morton, 2);
-  run->run(60);
-  ASSERT_GE(run->reorders(), 1u);
-  StateWriter w;
-  run->save_state(w);
-  const std::vector<std::uint64_t> order_at_save = run->elements().tag;
-  run->run(60);
+  for (MemoryOrder order : {MemoryOrder::Morton, MemoryOrder::Slabs}) {
+    SCOPED_TRACE(to_string(order));
+    auto run = film_system(film(true), order, 2);
+    run->run(60);
+    ASSERT_GE(run->reorders(), 1u);
+    StateWriter w;
+    run->save_state(w);
+    const std::vector<std::uint64_t> order_at_save = run->elements().tag;
+    run->run(60);
 
-  auto resumed = film_system(film(false), MemoryOrder::Morton, 2);  // built in another order
-  StateReader r(w.bytes());
-  resumed->load_state(r);
-  EXPECT_EQ(resumed->elements().tag, order_at_save);
-  resumed->run(60);
-  EXPECT_EQ(resumed->steps(), run->steps());
-  EXPECT_TRUE(bitwise_equal(capture_snapshot(run->elements(), 120, 0),
-                            capture_snapshot(resumed->elements(), 120, 0)));
-  EXPECT_EQ(resumed->energy().total(), run->energy().total());
+    auto resumed = film_system(film(false), order, 2);  // built in another order
+    StateReader r(w.bytes());
+    resumed->load_state(r);
+    EXPECT_EQ(resumed->elements().tag, order_at_save);
+    resumed->run(60);
+    EXPECT_EQ(resumed->steps(), run->steps());
+    EXPECT_TRUE(bitwise_equal(capture_snapshot(run->elements(), 120, 0),
+                              capture_snapshot(resumed->elements(), 120, 0)));
+    EXPECT_EQ(resumed->energy().total(), run->energy().total());
+  }
 }
 
 // The element arrays of a checkpoint are in tag order: the same state held in two memory orders
@@ -329,6 +440,37 @@ TEST(MemoryOrder, CheckpointsHoldTheElementsInTagOrder) {
       << " bytes before the topology";
 }
 
+// A stage's switch from as built to slabs reorders at once (not at the tenth rebuild); back to
+// as built keeps the order; an order that an updater cannot follow, or an unknown one, is refused
+// and changes nothing.
+TEST(MemoryOrder, SetMemoryOrderReordersAtOnceAndRefusesWhatCannotFollow) {
+  auto sys = film_system(film(true), MemoryOrder::AsBuilt, 2);
+  sys->run(3);
+  ASSERT_EQ(sys->reorders(), 0u);
+  sys->set_memory_order(MemoryOrder::Slabs);
+  EXPECT_EQ(sys->reorders(), 1u);
+  EXPECT_TRUE(is_identity_order(slab_order(sys->elements(), 2, sys->domain())));
+  const std::vector<std::uint64_t> slabs = sys->elements().tag;
+  sys->set_memory_order(MemoryOrder::AsBuilt);
+  sys->add_updater([](System&, double) {});
+  sys->run(30);
+  EXPECT_EQ(sys->elements().tag, slabs);
+  EXPECT_EQ(sys->reorders(), 1u);
+  for (MemoryOrder bad : {MemoryOrder::Slabs, static_cast<MemoryOrder>(9)}) {
+    try {
+      sys->set_memory_order(bad);
+      ADD_FAILURE() << "memory order " << static_cast<int>(bad) << " was set";
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(bad == MemoryOrder::Slabs ? "updater 1 of 1"
+                                                                     : "morton (1) or slabs (2)"),
+                std::string::npos)
+          << e.what();
+    }
+    EXPECT_EQ(sys->memory_order(), MemoryOrder::AsBuilt);
+    EXPECT_EQ(sys->elements().tag, slabs);
+  }
+}
+
 TEST(MemoryOrder, RefusesAnUpdaterThatCannotFollowAndAnUnknownOrder) {
   auto sys = film_system(film(false), MemoryOrder::Morton, 1);
   sys->add_updater([](System&, double) {});
@@ -347,7 +489,7 @@ TEST(MemoryOrder, RefusesAnUpdaterThatCannotFollowAndAnUnknownOrder) {
     bad.initialize();
     ADD_FAILURE() << "memory_order 7 was accepted";
   } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("morton"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("morton (1) or slabs (2)"), std::string::npos) << e.what();
   }
   for (int every : {0, -1, limits::kMaxReorderEvery + 1}) {
     IntegratorSettings e;

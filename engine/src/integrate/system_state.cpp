@@ -312,14 +312,18 @@ void System::load_state(StateReader& r) {
   initial_kinetic_ = r.get<double>("initial_kinetic");
   initial_stored_ = r.get<double>("initial_stored");
   // Elements come in tag order: put this system's in tag order (initialize may have reordered
-  // them), load, then restore the memory order the checkpoint was written in.
-  if (const std::vector<std::uint32_t> order = el_.tag_order(); !is_identity_order(order))
-    reorder_elements(order);
-  const std::vector<std::uint32_t> memory = saved_order(r, el_, load_elements(r, el_));
-  if (!is_identity_order(memory)) {
-    if (const std::string why = reorder_blocker(); !why.empty()) r.fail("memory order", why);
-    reorder_elements(memory);
-  }
+  // them), load, then restore the memory order the checkpoint was written in. The models must
+  // follow (a model's indices may outlive its loaded state: a bond list built from the topology);
+  // the updaters need not: the ones installed now are the stage's, which an uninterrupted run
+  // installed on elements already in this order (a stage that reordered them had updaters that
+  // follow), and whatever state of theirs holds indices is loaded next, as it was saved.
+  const auto put_in = [&](const std::vector<std::uint32_t>& order) {
+    if (is_identity_order(order)) return;
+    if (const std::string why = reorder_blocker(false); !why.empty()) r.fail("memory order", why);
+    apply_order(order);
+  };
+  put_in(el_.tag_order());
+  put_in(saved_order(r, el_, load_elements(r, el_)));
   check_loaded_elements(r, el_, dt_);
   load_topology(r, el_);
   load_groups(r, el_);

@@ -14,6 +14,8 @@ std::string_view to_string(MemoryOrder m) {
       return "as_built";
     case MemoryOrder::Morton:
       return "morton";
+    case MemoryOrder::Slabs:
+      return "slabs";
   }
   return "unknown";
 }
@@ -31,6 +33,40 @@ std::uint64_t spread3(std::uint64_t v) {
   return v;
 }
 
+// The elements' positions, wrapped into the box along the domain's periodic axes, and their
+// lowest and highest corner (the box's along periodic axes). Throws std::runtime_error for more
+// than 2^32 - 1 elements, and naming the first element whose position is not finite.
+struct Positions {
+  std::vector<Vec3> p;
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::max()), hi = -lo;
+};
+Positions checked_positions(const Elements& el, const Domain& domain, const char* who) {
+  const std::size_t n = el.size();
+  if (n >= std::numeric_limits<std::uint32_t>::max())
+    throw std::runtime_error(std::string(who) + ": more than 2^32 - 1 elements");
+  const bool periodic = domain.any_periodic();
+  Positions r;
+  r.p.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3& x = el.x[i];
+    if (!x.allFinite()) {
+      std::ostringstream m;
+      m << who << ": element " << i << " (tag " << el.tag[i] << ") has a non-finite position ("
+        << x.x() << ", " << x.y() << ", " << x.z() << "); the run has diverged";
+      throw std::runtime_error(m.str());
+    }
+    r.p[i] = periodic ? domain.wrap(x) : x;
+    r.lo = r.lo.cwiseMin(r.p[i]);
+    r.hi = r.hi.cwiseMax(r.p[i]);
+  }
+  for (int d = 0; d < 3; ++d)
+    if (domain.periodic(d)) {
+      r.lo[d] = domain.lo()[d];
+      r.hi[d] = domain.hi()[d];
+    }
+  return r;
+}
+
 }  // namespace
 
 std::vector<std::uint32_t> morton_order(const Elements& el, double cell, const Domain& domain) {
@@ -38,22 +74,8 @@ std::vector<std::uint32_t> morton_order(const Elements& el, double cell, const D
     throw std::invalid_argument("morton_order: the cell width must be finite and > 0 nm, got " +
                                 std::to_string(cell));
   const std::size_t n = el.size();
-  if (n >= std::numeric_limits<std::uint32_t>::max())
-    throw std::runtime_error("morton_order: more than 2^32 - 1 elements");
-  const bool periodic = domain.any_periodic();
-  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::max());
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec3& p = el.x[i];
-    if (!p.allFinite()) {
-      std::ostringstream m;
-      m << "morton_order: element " << i << " (tag " << el.tag[i] << ") has a non-finite position ("
-        << p.x() << ", " << p.y() << ", " << p.z() << "); the run has diverged";
-      throw std::runtime_error(m.str());
-    }
-    lo = lo.cwiseMin(periodic ? domain.wrap(p) : p);
-  }
-  for (int d = 0; d < 3; ++d)
-    if (domain.periodic(d)) lo[d] = domain.lo()[d];
+  const Positions pos = checked_positions(el, domain, "morton_order");
+  const Vec3 lo = pos.lo;
   // Cell coordinates clamp at 2^21 - 1 per axis (a box over 2 million cells wide keeps the order
   // of its far end as it was: correct, only less local).
   constexpr double kMaxCell = static_cast<double>((1u << 21) - 1);
@@ -61,7 +83,7 @@ std::vector<std::uint32_t> morton_order(const Elements& el, double cell, const D
   std::vector<std::uint64_t> key(n);
   std::uint64_t all_bits = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const Vec3 r = ((periodic ? domain.wrap(el.x[i]) : el.x[i]) - lo) * inv;
+    const Vec3 r = (pos.p[i] - lo) * inv;
     std::uint64_t k = 0;
     for (int d = 0; d < 3; ++d)
       k |= spread3(static_cast<std::uint64_t>(std::clamp(r[d], 0.0, kMaxCell))) << d;
@@ -79,6 +101,40 @@ std::vector<std::uint32_t> morton_order(const Elements& el, double cell, const D
     for (std::uint32_t i : order) tmp[count[(key[i] >> shift) & 0xff]++] = i;
     order.swap(tmp);
   }
+  return order;
+}
+
+std::vector<std::uint32_t> slab_order(const Elements& el, int slabs, const Domain& domain) {
+  if (slabs < 1 || slabs > (1 << 16))
+    throw std::invalid_argument("slab_order: the number of slabs must be in [1, 65536], got " +
+                                std::to_string(slabs));
+  const std::size_t n = el.size();
+  const Positions pos = checked_positions(el, domain, "slab_order");
+  const Vec3 width = pos.hi - pos.lo;
+  int axis = 0;
+  for (int d = 1; d < 3; ++d)
+    if (width[d] > width[axis]) axis = d;
+  // The cuts: the positions of rank n·s/slabs along the axis; an element at or past cut s lies in
+  // slab s or beyond.
+  std::vector<double> c(n), sorted(n);
+  for (std::size_t i = 0; i < n; ++i) c[i] = sorted[i] = pos.p[i][axis];
+  std::vector<double> cuts;
+  for (int s = 1; s < slabs && n > 0; ++s) {
+    const auto rank = sorted.begin() + static_cast<long>(n * static_cast<std::size_t>(s) / slabs);
+    std::nth_element(sorted.begin(), rank, sorted.end());
+    cuts.push_back(*rank);
+  }
+  // A counting sort by slab from the tag order: stable, so tag order within each slab.
+  std::vector<std::uint32_t> slab(n);
+  std::vector<std::size_t> start(static_cast<std::size_t>(slabs) + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    slab[i] =
+        static_cast<std::uint32_t>(std::upper_bound(cuts.begin(), cuts.end(), c[i]) - cuts.begin());
+    ++start[slab[i] + 1];
+  }
+  for (int s = 0; s < slabs; ++s) start[s + 1] += start[s];
+  std::vector<std::uint32_t> order(n);
+  for (std::uint32_t i : el.tag_order()) order[start[slab[i]]++] = i;
   return order;
 }
 

@@ -79,7 +79,8 @@ struct IntegratorSettings {
   double local_damping = 0.0;  // PFC local damping α in [0, 1)
   double skin = 0.5;           // neighbour-list skin (nm)
   // Memory order of the elements (neighbor/memory_order.h): Morton reorders them along a Morton
-  // curve over the neighbour search's cells at neighbour-list rebuilds. Every model
+  // curve over the neighbour search's cells at neighbour-list rebuilds, Slabs into one slab of
+  // space per thread (what lets two threads share little data: docs/engine.md). Every model
   // and updater must follow a reordering (ElementIndexHolder), else initialize and run throw
   // ConfigError naming the one that does not. Tags stay with their elements.
   MemoryOrder memory_order = MemoryOrder::AsBuilt;
@@ -150,6 +151,12 @@ class System {
   // PFC local damping α in [0, 1) from the next force evaluation on (a stage's damping); throws
   // ConfigError outside the range.
   void set_local_damping(double alpha);
+  // The memory order from now on (a stage's). Switching from AsBuilt to another reorders the
+  // elements at once (not only at the next memory_order_every-th list build); AsBuilt keeps them
+  // in the order they are in. Throws ConfigError, changing nothing, for an unknown order or one
+  // that a model or updater cannot follow.
+  void set_memory_order(MemoryOrder m);
+  MemoryOrder memory_order() const { return settings_.memory_order; }
   // Whether a model of this system acts (a stage's active models): an inactive one adds no force,
   // energy or stiffness from the next evaluation on, and keeps its state. Throws
   // std::invalid_argument for a model the system does not hold.
@@ -199,8 +206,8 @@ class System {
   // Throws ConfigError, changing nothing, when a model or updater does not follow a reordering,
   // and std::invalid_argument when new_to_old is not a permutation of the elements.
   void reorder_elements(std::span<const std::uint32_t> new_to_old);
-  // Reorderings done since the system was made (memory_order Morton: at the first neighbour-list
-  // build, then at every memory_order_every-th; plus any reorder_elements call).
+  // Reorderings done since the system was made (memory_order Morton or Slabs: at the first
+  // neighbour-list build, then at every memory_order_every-th; plus any reorder_elements call).
   std::size_t reorders() const { return reorders_; }
 
   // Wall time of run()'s parts since the system was made (step_timers.h).
@@ -269,14 +276,20 @@ class System {
   // its (a dashpot and its contact) in one pass where they can (ForceModel::compute_with).
   void compute_models(bool slow);
   // Memory order (system_order.cpp). update_pairs: the pair table's update, reordering the
-  // elements along the curve of settings_.memory_order first when a sub-list is stale.
+  // elements in settings_.memory_order first (a curve, or slabs) when a sub-list is stale.
   void update_pairs();
-  // True when the reordering along the curve changed the order (all sub-lists are then rebuilt).
+  // True when the reordering changed the order (all sub-lists are then rebuilt).
   bool reorder_along_curve();
+  // The order of settings_.memory_order for the elements now (new_to_old); empty for AsBuilt, and
+  // for Morton before the pair table exists (its cells are the lists' largest reach).
+  std::vector<std::uint32_t> wanted_order() const;
   // Throws ConfigError for an unknown memory_order, or one that a model or updater cannot follow.
   void check_memory_order() const;
-  // What stops a reordering ("force model 'x' does not follow ..."), empty when nothing does.
-  std::string reorder_blocker() const;
+  // What stops a reordering ("force model 'x' does not follow ..."), empty when nothing does;
+  // the models only without with_updaters (a checkpoint's load: below).
+  std::string reorder_blocker(bool with_updaters = true) const;
+  // reorder_elements without the check.
+  void apply_order(std::span<const std::uint32_t> new_to_old);
   // Every active model's stiffness bounds (of the slow models alone with slow_only).
   StiffnessSums stiffness_sums(bool slow_only) const;
   void update_kinetic();

@@ -1,8 +1,9 @@
 #pragma once
-// Memory order of the elements: a space-filling curve over the cell grid of the neighbour search,
-// so that elements near in space are near in memory (issue 13 item 3). The pair loops then find
-// a pair's second element, and the integrator its neighbours' data, in cache lines they have
-// just used; the bonds of a tube, whose segments are neighbours along it, likewise.
+// Memory order of the elements (issue 13 items 3 and 4): a space-filling curve over the cell grid
+// of the neighbour search, so that elements near in space are near in memory (the pair loops then
+// find a pair's second element in cache lines they have just used), or slabs of space, one per
+// thread, so that each thread's contiguous share of the elements is one region of space and the
+// threads share little data.
 #include <cstdint>
 #include <string_view>
 #include <vector>
@@ -16,6 +17,7 @@ namespace mdem {
 enum class MemoryOrder : std::uint8_t {
   AsBuilt = 0,  // the order the scene added them in (tag order), never changed
   Morton = 1,   // along a Morton (Z-order) curve over cells, redone at neighbour-list rebuilds
+  Slabs = 2,    // one slab of space per thread (slab_order), redone at neighbour-list rebuilds
 };
 
 std::string_view to_string(MemoryOrder m);
@@ -28,5 +30,18 @@ std::string_view to_string(MemoryOrder m);
 // std::invalid_argument for a cell that is not finite and > 0, and std::runtime_error naming the
 // element for a non-finite position.
 std::vector<std::uint32_t> morton_order(const Elements& el, double cell, const Domain& domain = {});
+
+// The slab order of el's elements: `slabs` slabs across the widest axis (a periodic axis's box
+// length, else the extent of the positions; positions wrapped into the box along periodic axes),
+// cut at the positions' quantiles so that the slabs hold equal numbers of elements (to within
+// elements at a cut's very position), in order along the axis, the elements of one slab in tag
+// order (a tube's segments stay in runs, cut only where the tube crosses a slab's face). One slab
+// is the tag order. With one slab per thread, a thread's contiguous share of the elements (the
+// integrator's even split, the pair lists' rows cut by their cost, the bonds sorted by their
+// elements) is one slab: it reads and writes the data of its own region, and only pairs and bonds
+// across a slab's faces reach another thread's. Depends on positions, tags and `slabs` only.
+// Throws std::invalid_argument for slabs < 1 or > 2^16, and std::runtime_error naming the element
+// for a non-finite position.
+std::vector<std::uint32_t> slab_order(const Elements& el, int slabs, const Domain& domain = {});
 
 }  // namespace mdem
