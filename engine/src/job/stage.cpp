@@ -63,6 +63,7 @@ void SystemStage::install() {
   u.insert(u.end(), s_.observers.begin(), s_.observers.end());
   sys.set_updaters(std::move(u));
   if (s_.local_damping) sys.set_local_damping(*s_.local_damping);
+  sys.set_memory_order(s_.memory_order);
   for (const auto& m : sys.models())
     sys.set_model_active(m.get(), std::find(s_.inactive_models.begin(), s_.inactive_models.end(),
                                             m.get()) == s_.inactive_models.end());

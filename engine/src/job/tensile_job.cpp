@@ -279,6 +279,8 @@ class TensileJob::RelaxTracker final : public Updater {
   // Positions, the bonds' energies and forces (their own state): not the elements' forces.
   bool reads_forces() const override { return false; }
   bool applies_loads() const override { return false; }
+  // It holds no element index: its counts, pores and bending share come from the system as it is.
+  bool follows_reorder() const override { return true; }
   void apply(System& sys, double t) override {
     const double tol = 0.5 * sys.dt();
     while (next_report_ < times_.size() && t >= times_[next_report_] - tol) {
@@ -760,6 +762,7 @@ void TensileJob::build(Elements el) {
     return std::make_unique<PrerelaxStage>(name, *this, [this, name, c] {
       SystemStage::Settings st;
       st.local_damping = spec_.prerelax_damping;
+      st.memory_order = MemoryOrder::Slabs;
       st.stop = PrerelaxCriterion::stop(c, *settings_.dt);
       return std::make_unique<SystemStage>(name, *this, std::move(st));
     });
@@ -773,6 +776,7 @@ void TensileJob::build(Elements el) {
     SystemStage::Settings st;
     st.local_damping = spec_.local_damping;
     st.observers = {relax_tracker_};
+    st.memory_order = MemoryOrder::Slabs;
     st.stop = StopCondition::after(spec_.relax_ps);
     relax_index_ = stages().size();
     add_stage(std::make_unique<SystemStage>("relax", *this, std::move(st)));

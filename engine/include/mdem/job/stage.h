@@ -110,6 +110,11 @@ class SystemStage final : public Stage {
     // Force models of the job's system that do not act during this stage (e.g. contact dashpots
     // in an undamped hold); every other model acts.
     std::vector<const ForceModel*> inactive_models;
+    // How the system orders its elements in memory during this stage (IntegratorSettings::
+    // memory_order): AsBuilt keeps them in the order they are in when the stage starts; Slabs
+    // (one slab of space per thread, so that threads share little data) needs every model and
+    // updater of the stage to follow a reordering.
+    MemoryOrder memory_order = MemoryOrder::AsBuilt;
     StopCondition stop;
   };
   // Throws std::invalid_argument for a stop condition that is not exactly one of a positive

@@ -65,6 +65,8 @@ class GripStressSampler final : public Updater {
   // Only when the next call samples (the grips' forces of the evaluation made at this call).
   bool reads_forces() const override;
   bool applies_loads() const override { return false; }  // an observer
+  // It finds the grips' elements by group at each sample: it holds no index.
+  bool follows_reorder() const override { return true; }
 
   const std::vector<GripSample>& samples() const { return samples_; }
   // Columns of the series, for the stress–strain and cycle analyses.
