@@ -178,8 +178,8 @@ constexpr double kIssue13Dt = 0.020;  // ps
 // law: its first safe step is ~5 fs). 20 fs is taken when it is within the critical step itself
 // (safety 1): the critical step's rotational vdW bound (docs/stability.md) puts the relaxed dense
 // film's at 22.9 fs, so the default safety 0.6 would run it at 13.7 fs, not the issue's set-up.
-System issue13_system(Elements el, bool dense, int threads,
-                      double skin = IntegratorSettings{}.skin) {
+System issue13_system(Elements el, bool dense, int threads, double skin = IntegratorSettings{}.skin,
+                      MemoryOrder order = MemoryOrder::AsBuilt) {
   auto build = [&](IntegratorSettings set) {
     System sys(el, set);
     sys.add(std::move(make_film(issue13_film(dense)).bonds));
@@ -192,6 +192,7 @@ System issue13_system(Elements el, bool dense, int threads,
   set.local_damping = 0.2;
   set.skin = skin;
   set.safety = 1.0;
+  set.memory_order = order;
   if (build(set).dt() >= kIssue13Dt) {
     set.dt = kIssue13Dt;
     return build(set);
@@ -221,10 +222,14 @@ const Elements& relaxed_issue13_film(bool dense) {
   return dense ? dense_film : sparse_film;
 }
 
-// Full steps at the films' own step (dt 20 fs when safe, local damping 0.2, as they were relaxed).
+// Full steps at the films' own step (dt 20 fs when safe, local damping 0.2, as they were relaxed),
+// the elements as built (slabs:0, tube after tube) or in one slab of space per thread (slabs:1,
+// MemoryOrder::Slabs; with 1 thread the same order as built).
 void issue13_steps(benchmark::State& state, bool dense) {
   const Elements& el = relaxed_issue13_film(dense);
-  System sys = issue13_system(el, dense, static_cast<int>(state.range(0)));
+  const MemoryOrder order = state.range(1) ? MemoryOrder::Slabs : MemoryOrder::AsBuilt;
+  System sys =
+      issue13_system(el, dense, static_cast<int>(state.range(0)), IntegratorSettings{}.skin, order);
   sys.run(10);  // warm-up
   const StepTimers t0 = sys.timers();
   const double steps = bench::timed_steps(state, sys, 10);
@@ -235,8 +240,17 @@ void issue13_steps(benchmark::State& state, bool dense) {
 }
 void BM_DenseFilmSteps(benchmark::State& state) { issue13_steps(state, true); }
 void BM_SparseFilmSteps(benchmark::State& state) { issue13_steps(state, false); }
-BENCHMARK(BM_DenseFilmSteps)->Apply(one_and_two_threads)->Iterations(4);
-BENCHMARK(BM_SparseFilmSteps)->Apply(one_and_two_threads)->Iterations(6);
+// 1 and 2 threads, as built and (2 threads) in slabs.
+void threads_and_slabs(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"threads", "slabs"})
+      ->Args({1, 0})
+      ->Args({2, 0})
+      ->Args({2, 1})
+      ->UseRealTime()
+      ->Unit(benchmark::kMillisecond);
+}
+BENCHMARK(BM_DenseFilmSteps)->Apply(threads_and_slabs)->Iterations(4);
+BENCHMARK(BM_SparseFilmSteps)->Apply(threads_and_slabs)->Iterations(6);
 
 // The integrator's pass alone (kicks, drift, local damping 0.2, kinetic energy, guard) on issue
 // 13's sparse film as generated, cut to its first `tubes` tubes × 148 segments: both force models
@@ -666,6 +680,19 @@ void BM_FilmNeighborBuild(benchmark::State& state) {
   omp_set_num_threads(saved);
 }
 BENCHMARK(BM_FilmNeighborBuild)->Apply(one_and_two_threads);
+
+// 2 threads over 1 on the dense film, as built and in slabs (issue 13 item 4), measured in one
+// process (bench::thread_windows): windows of 40 steps, 12 cycles per iteration.
+void BM_DenseFilmThreadWindows(benchmark::State& state) {
+  const Elements& el = relaxed_issue13_film(true);
+  const double skin = IntegratorSettings{}.skin;
+  System one = issue13_system(el, true, 1, skin, MemoryOrder::AsBuilt);
+  System two = issue13_system(el, true, 2, skin, MemoryOrder::AsBuilt);
+  System slabs = issue13_system(el, true, 2, skin, MemoryOrder::Slabs);
+  for (System* s : {&one, &two, &slabs}) s->run(10);  // warm-up
+  bench::thread_windows(state, one, two, slabs, 40, 12);
+}
+BENCHMARK(BM_DenseFilmThreadWindows)->Iterations(2)->UseRealTime()->Unit(benchmark::kSecond);
 
 }  // namespace
 

@@ -19,15 +19,15 @@
 // times 4 × S steps instead (1..100000; e.g. 250, so the neighbour phase holds the rebuilds a
 // long run has). MDEM_TENSILE_FILM_SAFETY=s steps at s × the critical step (default 0.6, the
 // jobs' default; (0, 1]) and balance_error reports the energy balance over the run.
-// morton:1 runs the system in Morton memory order (IntegratorSettings::memory_order, reordered at
-// the first list build and every 10th rebuild; the jobs run as built). Counters:
-// element_steps_per_s, the step's phases (pair_ms, neighbor_ms, integrate_ms), the neighbour
-// sub-lists' builds per step (builds_per_step, all sub-lists together), the pair phase
-// per listed vdW pair (pair_ns_per_listed_pair), the half pairs per segment within the vdW cutoff
-// (4T = 5.424 nm; tensile.md §4.1: medium 14.8 ready-to-relax, ≈ 22 relaxed), the listed pairs per
-// element, and the relaxation the state file had (relaxed_ps). BM_ClusterPairFill measures what a
-// cluster-pair list would evaluate on the same film (below); BM_AlignedPairCount times the tensile
-// job's per-frame aligned-pair count (below).
+// order:N runs the system in memory order N (IntegratorSettings::memory_order: 0 as built, 1
+// Morton, 2 one slab per thread, as the tensile job's relaxation; reordered at the first list build
+// and every 10th rebuild). Counters: element_steps_per_s, the step's phases (pair_ms, neighbor_ms,
+// integrate_ms), the neighbour sub-lists' builds per step (builds_per_step, all sub-lists
+// together), the pair phase per listed vdW pair (pair_ns_per_listed_pair), the half pairs per
+// segment within the vdW cutoff (4T = 5.424 nm; tensile.md §4.1: medium 14.8 ready-to-relax, ≈ 22
+// relaxed), the listed pairs per element, and the relaxation the state file had (relaxed_ps).
+// BM_ClusterPairFill measures what a cluster-pair list would evaluate on the same film (below);
+// BM_AlignedPairCount times the tensile job's per-frame aligned-pair count (below).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -270,7 +270,7 @@ void BM_RelaxedMediumFilm(benchmark::State& state) {
   double safety = 0;
   if (!stepping_settings(state, per_iteration, safety)) return;
   auto [f, rest, set] = film_case(state, safety);
-  if (state.range(2) != 0) set.memory_order = MemoryOrder::Morton;
+  set.memory_order = static_cast<MemoryOrder>(state.range(2));
   auto sys = tensile_film_system(f.el, set, kDashpot, rest.get());
   sys->run(5);  // warm-up
   const StepTimers t0 = sys->timers();
@@ -301,8 +301,8 @@ void BM_RelaxedMediumFilm(benchmark::State& state) {
   state.counters["pair_ns_per_listed_pair"] = state.counters["pair_ms"] * 1e6 / listed;
 }
 BENCHMARK(BM_RelaxedMediumFilm)
-    ->ArgNames({"threads", "nps", "morton"})
-    ->ArgsProduct({{1, 2}, {0, 1}, {0, 1}})
+    ->ArgNames({"threads", "nps", "order"})
+    ->ArgsProduct({{1, 2}, {0, 1}, {0, 1, 2}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond)
     ->Iterations(4);
@@ -317,6 +317,7 @@ void BM_TensileTestMediumFilm(benchmark::State& state) {
   double safety = 0;
   if (!stepping_settings(state, per_iteration, safety)) return;
   auto [f, rest, set] = film_case(state, safety);
+  set.memory_order = static_cast<MemoryOrder>(state.range(2));
   Elements el = f.el;
   const GripSelection grips = select_grips(el);
   auto sys = tensile_film_system(std::move(el), set, kDashpot, rest.get());
@@ -332,11 +333,38 @@ void BM_TensileTestMediumFilm(benchmark::State& state) {
   state.counters["balance_error"] = sys->energy_balance_error();
 }
 BENCHMARK(BM_TensileTestMediumFilm)
-    ->ArgNames({"threads", "nps"})
-    ->ArgsProduct({{1, 2}, {0, 1}})
+    ->ArgNames({"threads", "nps", "order"})
+    ->ArgsProduct({{1, 2}, {0, 1}, {0, 2}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond)
     ->Iterations(4);
+
+// 2 threads over 1 on the relaxed film (issue 13 item 4), as built and in slabs, in one process
+// (bench::thread_windows): BM_RelaxedMediumFilm's system on 1 thread as built, on 2 as built and
+// on 2 in MemoryOrder::Slabs (the tensile job's relaxation runs so), windows of 10 steps, 8 cycles
+// per iteration.
+void BM_RelaxedMediumFilmThreadWindows(benchmark::State& state) {
+  long per_iteration = 0;
+  double safety = 0;
+  if (!stepping_settings(state, per_iteration, safety)) return;
+  std::vector<std::unique_ptr<System>> sys;
+  for (auto [threads, order] :
+       {std::pair{1, MemoryOrder::AsBuilt}, {2, MemoryOrder::AsBuilt}, {2, MemoryOrder::Slabs}}) {
+    auto [f, rest, set] = film_case(state, safety);
+    set.threads = threads;
+    set.memory_order = order;
+    sys.push_back(tensile_film_system(f.el, set, kDashpot, rest.get()));
+    sys.back()->run(5);  // warm-up
+  }
+  bench::thread_windows(state, *sys[0], *sys[1], *sys[2], 10, 8);
+}
+BENCHMARK(BM_RelaxedMediumFilmThreadWindows)
+    ->ArgNames({"threads", "nps"})
+    ->Args({2, 0})
+    ->Args({2, 1})
+    ->UseRealTime()
+    ->Unit(benchmark::kSecond)
+    ->Iterations(2);
 
 // How far the automatic step's critical step (a Gershgorin bound over each element's summed
 // stiffness bounds, System::compute_critical_dt) is below the relaxed film's true one, 2/ω_max

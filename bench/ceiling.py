@@ -16,8 +16,8 @@ multiply-add rate two threads get at once over one alone's (~2 on two cores, ~1 
 threads of one core).
 
   bench/ceiling.py --build build --bench bench_tensile_film \\
-      --one 'BM_RelaxedMediumFilm/threads:1/nps:1/morton:0/' \\
-      --two 'BM_RelaxedMediumFilm/threads:2/nps:1/morton:0/' --rounds 7 \\
+      --one 'BM_RelaxedMediumFilm/threads:1/nps:1/order:0/' \\
+      --two 'BM_RelaxedMediumFilm/threads:2/nps:1/order:2/' --rounds 7 \\
       --env MDEM_TENSILE_FILM_DIR=/tmp/film
 """
 import argparse
