@@ -74,16 +74,25 @@ inline std::vector<double> ratios(const std::vector<double>& a, const std::vecto
 // alternating windows of `steps` steps, `cycles` cycles per iteration. Counters: the medians
 // over the cycles of each cycle's own rate ratio (two_over_one, slabs_over_one, slabs_over_two),
 // each system's median time per step (one_ms, two_ms, slabs_ms) and its phases over all
-// windows (<name>_pair_ms, _neighbor_ms, _integrate_ms, _updaters_ms).
+// windows (<name>_pair_ms, _neighbor_ms, _integrate_ms, _updaters_ms), its neighbour sub-list
+// builds per step and its reorderings since it was made.
 inline void thread_windows(benchmark::State& state, System& one, System& two, System& slabs,
                            long steps, int cycles) {
   const std::vector<System*> sys{&one, &two, &slabs};
   const char* const names[3] = {"one", "two", "slabs"};
   std::vector<StepTimers> before;
   std::vector<long> steps0;
+  std::vector<double> builds0;
+  // Neighbour sub-list builds, all sub-lists together.
+  const auto builds = [](const System& s) {
+    double b = 0;
+    for (const auto& e : s.pair_table().entries()) b += static_cast<double>(e.list->builds());
+    return b;
+  };
   for (System* s : sys) {
     before.push_back(s->timers());
     steps0.push_back(s->steps());
+    builds0.push_back(builds(*s));
   }
   std::vector<std::vector<double>> ms(3);
   for (auto _ : state) {
@@ -104,6 +113,8 @@ inline void thread_windows(benchmark::State& state, System& one, System& two, Sy
     state.counters[name + "_neighbor_ms"] = (b.neighbor_s - a.neighbor_s) / n * 1e3;
     state.counters[name + "_integrate_ms"] = (b.integrate_s - a.integrate_s) / n * 1e3;
     state.counters[name + "_updaters_ms"] = (b.updaters_s - a.updaters_s) / n * 1e3;
+    state.counters[name + "_builds_per_step"] = (builds(*sys[k]) - builds0[k]) / n;
+    state.counters[name + "_reorders"] = static_cast<double>(sys[k]->reorders());
   }
 }
 
