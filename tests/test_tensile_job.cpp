@@ -367,8 +367,8 @@ TEST(TensileJob, TwoThreadsRelaxInSlabsAndResumeBitIdentically) {
       const Stage* st = job.current_stage();
       if (!st || !job.stage_begun()) return;
       const System& sys = job.system();
-      in_slabs[st->name()] = in_slabs[st->name()] ||
-                             is_identity_order(slab_order(sys.elements(), 2, sys.domain()));
+      in_slabs[st->name()] =
+          in_slabs[st->name()] || is_identity_order(slab_order(sys.elements(), 2, sys.domain()));
       if (st->name() == "prerelax") reorders_in_prerelax = sys.reorders();
     };
     JobCadence c;
