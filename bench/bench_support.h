@@ -4,11 +4,11 @@
 
 #include <algorithm>
 #include <chrono>
-#include <limits>
 #include <string>
 #include <vector>
 
 #include "mdem/integrate/system.h"
+#include "mdem/observe/percentile.h"
 
 namespace mdem::bench {
 
@@ -25,13 +25,22 @@ inline double timed_steps(benchmark::State& state, System& sys, long per_iterati
   return steps;
 }
 
-// The step's time split by phase (System::timers()), in ms per step, over the timed steps.
+// The step's time split by phase (System::timers()), in ms per step, over the timed steps; the
+// counters' names start with `prefix` (pair_ms, neighbor_ms, integrate_ms, updaters_ms).
 inline void add_phase_counters(benchmark::State& state, const StepTimers& before,
-                               const StepTimers& after, double steps) {
-  state.counters["pair_ms"] = (after.pair_s - before.pair_s) / steps * 1e3;
-  state.counters["neighbor_ms"] = (after.neighbor_s - before.neighbor_s) / steps * 1e3;
-  state.counters["integrate_ms"] = (after.integrate_s - before.integrate_s) / steps * 1e3;
-  state.counters["updaters_ms"] = (after.updaters_s - before.updaters_s) / steps * 1e3;
+                               const StepTimers& after, double steps,
+                               const std::string& prefix = "") {
+  state.counters[prefix + "pair_ms"] = (after.pair_s - before.pair_s) / steps * 1e3;
+  state.counters[prefix + "neighbor_ms"] = (after.neighbor_s - before.neighbor_s) / steps * 1e3;
+  state.counters[prefix + "integrate_ms"] = (after.integrate_s - before.integrate_s) / steps * 1e3;
+  state.counters[prefix + "updaters_ms"] = (after.updaters_s - before.updaters_s) / steps * 1e3;
+}
+
+// Neighbour sub-list builds of sys so far, all sub-lists together.
+inline double list_builds(const System& sys) {
+  double b = 0;
+  for (const auto& e : sys.pair_table().entries()) b += static_cast<double>(e.list->builds());
+  return b;
 }
 
 // Time per step (ms) of several systems run in alternating windows of `steps` steps each, in one
@@ -54,13 +63,9 @@ inline std::vector<std::vector<double>> alternating_windows(const std::vector<Sy
   return ms;
 }
 
-// The median of v (the mean of the middle two for an even count); NaN when empty.
-inline double median(std::vector<double> v) {
-  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-  std::sort(v.begin(), v.end());
-  const std::size_t m = v.size() / 2;
-  return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
-}
+// The median of v (the observables' percentile rule at 50: the mean of the middle two for an even
+// count).
+inline double median(const std::vector<double>& v) { return percentile(v, 50.0, "window times"); }
 
 // Per cycle, a's time over b's (b's rate over a's when a, b are times per step).
 inline std::vector<double> ratios(const std::vector<double>& a, const std::vector<double>& b) {
@@ -83,16 +88,10 @@ inline void thread_windows(benchmark::State& state, System& one, System& two, Sy
   std::vector<StepTimers> before;
   std::vector<long> steps0;
   std::vector<double> builds0;
-  // Neighbour sub-list builds, all sub-lists together.
-  const auto builds = [](const System& s) {
-    double b = 0;
-    for (const auto& e : s.pair_table().entries()) b += static_cast<double>(e.list->builds());
-    return b;
-  };
   for (System* s : sys) {
     before.push_back(s->timers());
     steps0.push_back(s->steps());
-    builds0.push_back(builds(*s));
+    builds0.push_back(list_builds(*s));
   }
   std::vector<std::vector<double>> ms(3);
   for (auto _ : state) {
@@ -107,13 +106,8 @@ inline void thread_windows(benchmark::State& state, System& one, System& two, Sy
     const std::string name = names[k];
     state.counters[name + "_ms"] = median(ms[k]);
     const double n = static_cast<double>(sys[k]->steps() - steps0[k]);
-    const StepTimers& a = before[k];
-    const StepTimers& b = sys[k]->timers();
-    state.counters[name + "_pair_ms"] = (b.pair_s - a.pair_s) / n * 1e3;
-    state.counters[name + "_neighbor_ms"] = (b.neighbor_s - a.neighbor_s) / n * 1e3;
-    state.counters[name + "_integrate_ms"] = (b.integrate_s - a.integrate_s) / n * 1e3;
-    state.counters[name + "_updaters_ms"] = (b.updaters_s - a.updaters_s) / n * 1e3;
-    state.counters[name + "_builds_per_step"] = (builds(*sys[k]) - builds0[k]) / n;
+    add_phase_counters(state, before[k], sys[k]->timers(), n, name + "_");
+    state.counters[name + "_builds_per_step"] = (list_builds(*sys[k]) - builds0[k]) / n;
     state.counters[name + "_reorders"] = static_cast<double>(sys[k]->reorders());
   }
 }

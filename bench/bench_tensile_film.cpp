@@ -274,17 +274,12 @@ void BM_RelaxedMediumFilm(benchmark::State& state) {
   auto sys = tensile_film_system(f.el, set, kDashpot, rest.get());
   sys->run(5);  // warm-up
   const StepTimers t0 = sys->timers();
-  const auto builds = [&] {
-    double b = 0;
-    for (const auto& e : sys->pair_table().entries()) b += static_cast<double>(e.list->builds());
-    return b;
-  };
-  const double b0 = builds();
+  const double b0 = bench::list_builds(*sys);
   const double steps = bench::timed_steps(state, *sys, per_iteration);
   bench::add_phase_counters(state, t0, sys->timers(), steps);
   // Sub-list builds (all kind pairs together) per timed step: the neighbour phase is these
   // builds plus one displacement check per sub-list and step.
-  state.counters["builds_per_step"] = (builds() - b0) / steps;
+  state.counters["builds_per_step"] = (bench::list_builds(*sys) - b0) / steps;
   state.counters["sub_lists"] = static_cast<double>(sys->pair_table().entries().size());
   const double n = static_cast<double>(sys->elements().size());
   state.counters["dt_fs"] = sys->dt() * 1e3;
@@ -344,13 +339,14 @@ BENCHMARK(BM_TensileTestMediumFilm)
 // on 2 in MemoryOrder::Slabs (the tensile job's relaxation runs so), windows of 10 steps, 8 cycles
 // per iteration.
 void BM_RelaxedMediumFilmThreadWindows(benchmark::State& state) {
-  long per_iteration = 0;
+  long per_iteration = 0;  // (the windows' own length is fixed)
   double safety = 0;
   if (!stepping_settings(state, per_iteration, safety)) return;
+  const auto [f, rest, base] = film_case(state, safety);
   std::vector<std::unique_ptr<System>> sys;
   for (auto [threads, order] :
        {std::pair{1, MemoryOrder::AsBuilt}, {2, MemoryOrder::AsBuilt}, {2, MemoryOrder::Slabs}}) {
-    auto [f, rest, set] = film_case(state, safety);
+    IntegratorSettings set = base;
     set.threads = threads;
     set.memory_order = order;
     sys.push_back(tensile_film_system(f.el, set, kDashpot, rest.get()));

@@ -116,8 +116,8 @@ std::vector<std::uint32_t> slab_order(const Elements& el, int slabs, const Domai
     if (width[d] > width[axis]) axis = d;
   // The cuts: the positions of rank n·s/slabs along the axis; an element at or past cut s lies in
   // slab s or beyond.
-  std::vector<double> c(n), sorted(n);
-  for (std::size_t i = 0; i < n; ++i) c[i] = sorted[i] = pos.p[i][axis];
+  std::vector<double> sorted(n);
+  for (std::size_t i = 0; i < n; ++i) sorted[i] = pos.p[i][axis];
   std::vector<double> cuts;
   for (int s = 1; s < slabs && n > 0; ++s) {
     const auto rank = sorted.begin() + static_cast<long>(n * static_cast<std::size_t>(s) / slabs);
@@ -128,8 +128,8 @@ std::vector<std::uint32_t> slab_order(const Elements& el, int slabs, const Domai
   std::vector<std::uint32_t> slab(n);
   std::vector<std::size_t> start(static_cast<std::size_t>(slabs) + 1, 0);
   for (std::size_t i = 0; i < n; ++i) {
-    slab[i] =
-        static_cast<std::uint32_t>(std::upper_bound(cuts.begin(), cuts.end(), c[i]) - cuts.begin());
+    slab[i] = static_cast<std::uint32_t>(
+        std::upper_bound(cuts.begin(), cuts.end(), pos.p[i][axis]) - cuts.begin());
     ++start[slab[i] + 1];
   }
   for (int s = 0; s < slabs; ++s) start[s + 1] += start[s];
